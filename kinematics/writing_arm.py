@@ -1,0 +1,497 @@
+"""The 4-DOF writing arm: base yaw and three pitch joints, closed-form IK with every branch.
+
+One model covers both seed arms (geometry from ``configs/arms/*.yaml``):
+
+* ``pincher`` - the PhantomX Pincher of seed 002 (lab 6): base 10 cm, riser 4.5 cm,
+  links 10.7 / 10.5 cm, pen 9.5 cm;
+* ``thesis_rrrr`` - the RRRR arm of seed 003: zero pose hanging straight down, the pen
+  offset sideways by ``l_f`` from the plane of the links.
+
+Model (lengths in cm, angles in radians)::
+
+    yaw   = q1 + yaw_offset                     u = (cos yaw, sin yaw), v = (sin yaw, -cos yaw)
+    psi_A = q2 + pitch_offset,  psi_B = psi_A + q3,  psi_T = psi_B + q4   (from the horizontal)
+    r     = A cos psi_A + B cos psi_B + T cos psi_T
+    (x, y) = base_xy + r u + lateral_offset v
+    z     = shoulder_height + A sin psi_A + B sin psi_B + T sin psi_T
+    phi   = q2 + q3 + q4                         (pen pitch in the arm's own convention)
+
+For the Pincher ``phi = -pi/2`` points the pen straight down; for the RRRR arm (pitch
+offset -90 deg) ``phi = 0`` does, as in the thesis (eq. 3.25).
+
+Inverse kinematics (:meth:`WritingArm.ik_all`) returns four branches: the arm facing the
+target or reaching back over its base (yaw + pi, ``r < 0``), each with the elbow on
+either side. Every branch reproduces ``(x, y, z, phi)`` through :meth:`WritingArm.fk`
+(checked by round-trip tests). :meth:`WritingArm.ik` picks the branch inside the joint
+limits nearest the current pose (seed 002's ``findOptimalSolution``, with its errors
+fixed: seed 002's branch rows 3 and 4 flip the signs of ``q3``/``q4`` and do not
+reproduce their targets).
+
+Servo convention: a real arm's servos may count from another zero and in the other
+direction: ``servo = sign * q + offset`` (Pincher: signs ``(+1, -1, -1, -1)``, offsets
+``(90, 90, 0, 0)`` deg - exactly seed 002's ``[t1 + pi/2, -t2 + pi/2, -t3, -t4]``);
+joint limits are given in servo angles, as on the hardware (Pincher: +-150 deg).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import configs as _configs
+
+from .chains import DHChain, DHLink, PoEChain
+from .errors import InvalidInputError, JointLimitError, UnreachableError, as_array
+
+__all__ = ["WritingArm", "ARM_SCHEMA", "BRANCHES"]
+
+TWO_PI = 2.0 * math.pi
+#: Branch order of :meth:`WritingArm.ik_all`: (reach, sign of q3).
+BRANCHES: tuple[str, ...] = ("front, q3<=0", "front, q3>=0", "back, q3<=0", "back, q3>=0")
+
+ARM_SCHEMA: dict[str, _configs.Spec] = {
+    "name": _configs.Text(doc="short name of the arm"),
+    "description": _configs.Text(default=""),
+    "base_xy_cm": _configs.Vector(length=2, default=[0.0, 0.0], doc="base axis position"),
+    "base_height_cm": _configs.Number(lo=0.0, doc="height of the base top"),
+    "shoulder_riser_cm": _configs.Number(lo=0.0, default=0.0, doc="base top to shoulder axis"),
+    "upper_arm_cm": _configs.Number(lo=0.0, lo_open=True, doc="shoulder to elbow"),
+    "forearm_cm": _configs.Number(lo=0.0, lo_open=True, doc="elbow to wrist"),
+    "tool_cm": _configs.Number(lo=0.0, doc="wrist to pen tip"),
+    "lateral_offset_cm": _configs.Number(default=0.0, doc="pen plane offset from the base axis"),
+    "yaw_offset_deg": _configs.Number(lo=-360.0, hi=360.0, default=0.0),
+    "pitch_offset_deg": _configs.Number(lo=-360.0, hi=360.0, default=0.0),
+    "servo_sign": _configs.Vector(length=4, default=[1, 1, 1, 1],
+                                  item=_configs.Number(lo=-1, hi=1, integer=True)),
+    "servo_offset_deg": _configs.Vector(length=4, default=[0.0, 0.0, 0.0, 0.0],
+                                        item=_configs.Number(lo=-360.0, hi=360.0)),
+    "servo_limits_deg": _configs.Matrix(rows=4, cols=2, item=_configs.Number(lo=-720.0, hi=720.0),
+                                        doc="per joint [low, high] in servo degrees"),
+    "mass_kg": _configs.Vector(length=3, default=[0.12, 0.10, 0.05],
+                               item=_configs.Number(lo=0.0, lo_open=True),
+                               doc="upper arm, forearm, pen holder (used by the simulation)"),
+    "max_torque_ncm": _configs.Vector(length=4, default=[150.0, 150.0, 150.0, 150.0],
+                                      item=_configs.Number(lo=0.0, lo_open=True)),
+}
+
+
+def _wrap(a: float) -> float:
+    """Angle to (-pi, pi]."""
+    return a - TWO_PI * math.floor((a + math.pi) / TWO_PI)
+
+
+@dataclass(frozen=True)
+class WritingArm:
+    """Geometry and kinematics of a yaw + three-pitch writing arm (cm, radians).
+
+    Build one with :meth:`from_config` (``"pincher"``, ``"thesis_rrrr"`` or a YAML path)
+    or directly. ``limits`` are model-space joint limits, shape (4, 2).
+    """
+
+    name: str
+    base_xy: tuple[float, float]
+    shoulder_height: float
+    upper_arm: float
+    forearm: float
+    tool: float
+    lateral_offset: float = 0.0
+    yaw_offset: float = 0.0
+    pitch_offset: float = 0.0
+    limits: np.ndarray = field(default_factory=lambda: np.tile([-math.pi, math.pi], (4, 1)))
+    servo_sign: tuple[int, int, int, int] = (1, 1, 1, 1)
+    servo_offset: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    mass: tuple[float, float, float] = (0.12, 0.10, 0.05)
+    max_torque: tuple[float, float, float, float] = (150.0, 150.0, 150.0, 150.0)
+
+    def __post_init__(self) -> None:
+        lim = as_array("limits", self.limits, (4, 2))
+        if lim.shape != (4, 2) or np.any(lim[:, 0] >= lim[:, 1]):
+            raise InvalidInputError(f"limits={lim.tolist()}; expected 4 rows of [low < high] (rad)")
+        object.__setattr__(self, "limits", lim)
+        for key in ("upper_arm", "forearm"):
+            if not getattr(self, key) > 0:
+                raise InvalidInputError(f"{key}={getattr(self, key)!r}; expected a length > 0 cm")
+        if self.tool < 0:
+            raise InvalidInputError(f"tool={self.tool!r}; expected a length >= 0 cm")
+        # scalar copies for the microsecond path
+        object.__setattr__(self, "_lim", [tuple(map(float, r)) for r in lim])
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_config(cls, name_or_path: str | Path = "pincher") -> WritingArm:
+        """Load ``configs/arms/<name>.yaml`` or a YAML file; raises ``configs.ConfigError``."""
+        cfg = _configs.load("arms", name_or_path, ARM_SCHEMA)
+        src = str(_configs.resolve("arms", name_or_path))
+        sign = [int(s) for s in cfg["servo_sign"]]
+        for i, s in enumerate(sign):
+            if s not in (-1, 1):
+                raise _configs.ConfigError(src, f"servo_sign[{i}]", s, "+1 or -1")
+        offset = np.radians(cfg["servo_offset_deg"])
+        servo_lim = np.radians(np.asarray(cfg["servo_limits_deg"], dtype=float))
+        for i, (lo, hi) in enumerate(servo_lim):
+            if lo >= hi:
+                raise _configs.ConfigError(
+                    src, f"servo_limits_deg[{i}]", cfg["servo_limits_deg"][i], "[low, high] with low < high"
+                )
+        # servo = s q + o  ->  q = (servo - o) / s ; a negative sign swaps the interval ends
+        q_lim = np.sort((servo_lim - offset[:, None]) * np.asarray(sign, float)[:, None], axis=1)
+        return cls(
+            name=cfg["name"],
+            base_xy=(cfg["base_xy_cm"][0], cfg["base_xy_cm"][1]),
+            shoulder_height=cfg["base_height_cm"] + cfg["shoulder_riser_cm"],
+            upper_arm=cfg["upper_arm_cm"],
+            forearm=cfg["forearm_cm"],
+            tool=cfg["tool_cm"],
+            lateral_offset=cfg["lateral_offset_cm"],
+            yaw_offset=math.radians(cfg["yaw_offset_deg"]),
+            pitch_offset=math.radians(cfg["pitch_offset_deg"]),
+            limits=q_lim,
+            servo_sign=tuple(sign),  # type: ignore[arg-type]
+            servo_offset=tuple(float(o) for o in offset),  # type: ignore[arg-type]
+            mass=tuple(cfg["mass_kg"]),  # type: ignore[arg-type]
+            max_torque=tuple(cfg["max_torque_ncm"]),  # type: ignore[arg-type]
+        )
+
+    # ------------------------------------------------------------------ conventions
+    def to_servo(self, q: object) -> np.ndarray:
+        """Model joint angles -> servo angles (rad), batched."""
+        qa = as_array("q", q, (4,))
+        return qa * np.asarray(self.servo_sign, float) + np.asarray(self.servo_offset)
+
+    def from_servo(self, servo: object) -> np.ndarray:
+        """Servo angles (rad) -> model joint angles, batched."""
+        sa = as_array("servo", servo, (4,))
+        return (sa - np.asarray(self.servo_offset)) * np.asarray(self.servo_sign, float)
+
+    def within_limits(self, q: object, tol: float = 1e-9) -> np.ndarray:
+        """Boolean (...,) : every joint inside its limits (model space)."""
+        qa = as_array("q", q, (4,))
+        return np.all((qa >= self.limits[:, 0] - tol) & (qa <= self.limits[:, 1] + tol), axis=-1)
+
+    # ------------------------------------------------------------------ forward kinematics
+    def fk(self, q: object) -> np.ndarray:
+        """Pen tip and pitch ``(..., 4)`` = ``(x, y, z, phi)`` in cm / rad; ``phi`` in (-pi, pi]."""
+        qa = as_array("q", q, (4,))
+        q1, q2, q3, q4 = np.moveaxis(qa, -1, 0)
+        pa = q2 + self.pitch_offset
+        pb = pa + q3
+        pt = pb + q4
+        r = self.upper_arm * np.cos(pa) + self.forearm * np.cos(pb) + self.tool * np.cos(pt)
+        z = (self.shoulder_height + self.upper_arm * np.sin(pa) + self.forearm * np.sin(pb)
+             + self.tool * np.sin(pt))
+        yaw = q1 + self.yaw_offset
+        c, s = np.cos(yaw), np.sin(yaw)
+        lf = self.lateral_offset
+        x = self.base_xy[0] + r * c + lf * s
+        y = self.base_xy[1] + r * s - lf * c
+        phi = np.mod(q2 + q3 + q4 + np.pi, TWO_PI) - np.pi
+        phi = np.where(phi == -np.pi, np.pi, phi)
+        return np.stack([x, y, z, phi], axis=-1)
+
+    def fk_one(self, q1: float, q2: float, q3: float, q4: float) -> tuple[float, float, float, float]:
+        """Scalar :meth:`fk` for one configuration (plain floats; the fast path)."""
+        pa = q2 + self.pitch_offset
+        pb = pa + q3
+        pt = pb + q4
+        a, b, t = self.upper_arm, self.forearm, self.tool
+        r = a * math.cos(pa) + b * math.cos(pb) + t * math.cos(pt)
+        z = self.shoulder_height + a * math.sin(pa) + b * math.sin(pb) + t * math.sin(pt)
+        yaw = q1 + self.yaw_offset
+        c, s = math.cos(yaw), math.sin(yaw)
+        lf = self.lateral_offset
+        return (self.base_xy[0] + r * c + lf * s, self.base_xy[1] + r * s - lf * c, z,
+                _wrap(q2 + q3 + q4))
+
+    def joint_positions(self, q: object) -> np.ndarray:
+        """World positions of base, shoulder, elbow, wrist and pen tip: ``(..., 5, 3)``."""
+        qa = as_array("q", q, (4,))
+        q1, q2, q3, q4 = np.moveaxis(qa, -1, 0)
+        yaw = q1 + self.yaw_offset
+        u = np.stack([np.cos(yaw), np.sin(yaw)], -1)
+        v = np.stack([np.sin(yaw), -np.cos(yaw)], -1)
+        pa = q2 + self.pitch_offset
+        angles = np.stack([pa, pa + q3, pa + q3 + q4], -1)
+        lengths = np.array([self.upper_arm, self.forearm, self.tool])
+        r = np.concatenate([np.zeros(qa.shape[:-1] + (1,)),
+                            np.cumsum(lengths * np.cos(angles), -1)], -1)
+        z = self.shoulder_height + np.concatenate(
+            [np.zeros(qa.shape[:-1] + (1,)), np.cumsum(lengths * np.sin(angles), -1)], -1)
+        xy = (np.asarray(self.base_xy) + self.lateral_offset * v)[..., None, :] + r[..., None] * u[..., None, :]
+        pts = np.concatenate([xy, z[..., None]], -1)
+        base = np.concatenate([np.broadcast_to(np.asarray(self.base_xy, float), qa.shape[:-1] + (2,)),
+                               np.zeros(qa.shape[:-1] + (1,))], -1)
+        return np.concatenate([base[..., None, :], pts], -2)
+
+    def pen_direction(self, q: object) -> np.ndarray:
+        """Unit vector from wrist to pen tip, world frame, ``(..., 3)``."""
+        qa = as_array("q", q, (4,))
+        yaw = qa[..., 0] + self.yaw_offset
+        pt = qa[..., 1] + qa[..., 2] + qa[..., 3] + self.pitch_offset
+        return np.stack([np.cos(pt) * np.cos(yaw), np.cos(pt) * np.sin(yaw), np.sin(pt)], -1)
+
+    def jacobian(self, q: object) -> np.ndarray:
+        """Analytic Jacobian of ``(x, y, z, phi)`` w.r.t. ``q``: ``(..., 4, 4)``."""
+        qa = as_array("q", q, (4,))
+        q1, q2, q3, q4 = np.moveaxis(qa, -1, 0)
+        pa = q2 + self.pitch_offset
+        pb, pt = pa + q3, pa + q3 + q4
+        a, b, t = self.upper_arm, self.forearm, self.tool
+        st, sb, sa = t * np.sin(pt), b * np.sin(pb), a * np.sin(pa)
+        ct, cb, ca = t * np.cos(pt), b * np.cos(pb), a * np.cos(pa)
+        r = ca + cb + ct
+        dr = np.stack([-(sa + sb + st), -(sb + st), -st], -1)  # d r / d(q2, q3, q4)
+        dz = np.stack([ca + cb + ct, cb + ct, ct], -1)
+        yaw = q1 + self.yaw_offset
+        c, s = np.cos(yaw), np.sin(yaw)
+        lf = self.lateral_offset
+        jac = np.zeros(qa.shape[:-1] + (4, 4))
+        jac[..., 0, 0] = -r * s + lf * c
+        jac[..., 1, 0] = r * c + lf * s
+        jac[..., 0, 1:] = dr * c[..., None]
+        jac[..., 1, 1:] = dr * s[..., None]
+        jac[..., 2, 1:] = dz
+        jac[..., 3, 1:] = 1.0
+        return jac
+
+    def task_one(self, q: list[float]) -> tuple[list[float], list[list[float]]]:
+        """Scalar ``(x, y, z, phi)`` and its 4x4 Jacobian (rows) for the numeric solvers."""
+        q1, q2, q3, q4 = q
+        pa = q2 + self.pitch_offset
+        pb = pa + q3
+        pt = pb + q4
+        a, b, t = self.upper_arm, self.forearm, self.tool
+        ca, cb, ct = a * math.cos(pa), b * math.cos(pb), t * math.cos(pt)
+        sa, sb, st = a * math.sin(pa), b * math.sin(pb), t * math.sin(pt)
+        r = ca + cb + ct
+        yaw = q1 + self.yaw_offset
+        c, s = math.cos(yaw), math.sin(yaw)
+        lf = self.lateral_offset
+        d2, d3, d4 = -(sa + sb + st), -(sb + st), -st
+        f = [self.base_xy[0] + r * c + lf * s, self.base_xy[1] + r * s - lf * c,
+             self.shoulder_height + sa + sb + st, q2 + q3 + q4]
+        jac = [
+            [-r * s + lf * c, d2 * c, d3 * c, d4 * c],
+            [r * c + lf * s, d2 * s, d3 * s, d4 * s],
+            [0.0, ca + cb + ct, cb + ct, ct],
+            [0.0, 1.0, 1.0, 1.0],
+        ]
+        return f, jac
+
+    # ------------------------------------------------------------------ chains
+    def dh_chain(self) -> DHChain:
+        """The same arm as a standard DH chain (tool frame: x along the pen)."""
+        base = np.eye(4)
+        base[:2, 3] = self.base_xy
+        return DHChain(
+            [
+                DHLink(d=self.shoulder_height, theta=self.yaw_offset, alpha=math.pi / 2, joint=0,
+                       name="yaw"),
+                DHLink(d=self.lateral_offset, theta=self.pitch_offset, a=self.upper_arm, joint=1,
+                       name="upper_arm"),
+                DHLink(a=self.forearm, joint=2, name="forearm"),
+                DHLink(a=self.tool, joint=3, name="pen"),
+            ],
+            base=base,
+        )
+
+    def poe_chain(self) -> PoEChain:
+        """The same arm as screw axes and a home pose, written from the geometry at q = 0."""
+        yo, po = self.yaw_offset, self.pitch_offset
+        u = np.array([math.cos(yo), math.sin(yo), 0.0])
+        v = np.array([math.sin(yo), -math.cos(yo), 0.0])
+        up = np.array([0.0, 0.0, 1.0])
+        heading = math.cos(po) * u + math.sin(po) * up  # every link points this way at q = 0
+        base = np.array([self.base_xy[0], self.base_xy[1], 0.0])
+        j2 = base + self.shoulder_height * up + self.lateral_offset * v
+        j3 = j2 + self.upper_arm * heading
+        j4 = j3 + self.forearm * heading
+        tip = j4 + self.tool * heading
+
+        def revolute(w: np.ndarray, point: np.ndarray) -> np.ndarray:
+            return np.concatenate([w, -np.cross(w, point)])
+
+        screws = np.stack([revolute(up, base), revolute(v, j2), revolute(v, j3), revolute(v, j4)])
+        home = np.eye(4)
+        home[:3, 0], home[:3, 2] = heading, v
+        home[:3, 1] = np.cross(v, heading)
+        home[:3, 3] = tip
+        return PoEChain(screws=screws, home=home)
+
+    # ------------------------------------------------------------------ inverse kinematics
+    def ik_all(self, target: object) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """All four closed-form branches for targets ``(..., 4)`` = ``(x, y, z, phi)``.
+
+        Returns:
+            q: ``(..., 4 branches, 4 joints)``, each joint wrapped into its limit interval
+               when a representative exists (NaN where the branch is unreachable);
+            reachable: ``(..., 4)`` the branch exists geometrically;
+            in_limits: ``(..., 4)`` it also respects every joint limit.
+        Branch order: :data:`BRANCHES`.
+        """
+        t = as_array("target", target, (4,))
+        x, y, z, phi = np.moveaxis(t, -1, 0)
+        dx, dy = x - self.base_xy[0], y - self.base_xy[1]
+        lf = self.lateral_offset
+        rho2 = dx * dx + dy * dy - lf * lf
+        rho = np.sqrt(np.maximum(rho2, 0.0))
+        psi_t = phi + self.pitch_offset
+        a, b, tl = self.upper_arm, self.forearm, self.tool
+        bearing = np.arctan2(dy, dx)
+        zw = z - self.shoulder_height - tl * np.sin(psi_t)
+        out = np.empty(t.shape[:-1] + (4, 4))
+        ok = np.empty(t.shape[:-1] + (4,), dtype=bool)
+        for reach, sgn in ((0, 1.0), (1, -1.0)):
+            r = sgn * rho
+            yaw = bearing + np.arctan2(lf, r)
+            rw = r - tl * np.cos(psi_t)
+            cos3 = (rw * rw + zw * zw - a * a - b * b) / (2 * a * b)
+            valid = (rho2 >= 0) & (np.abs(cos3) <= 1 + 1e-12)
+            q3m = np.arccos(np.clip(cos3, -1.0, 1.0))
+            for elbow, q3 in ((0, -q3m), (1, q3m)):
+                psi_a = np.arctan2(zw, rw) - np.arctan2(b * np.sin(q3), a + b * np.cos(q3))
+                k = 2 * reach + elbow
+                out[..., k, 0] = yaw - self.yaw_offset
+                out[..., k, 1] = psi_a - self.pitch_offset
+                out[..., k, 2] = q3
+                out[..., k, 3] = psi_t - psi_a - q3
+                ok[..., k] = valid
+        lo, hi = self.limits[:, 0], self.limits[:, 1]
+        wrapped = lo + np.mod(out - lo, TWO_PI)
+        # a representative inside [lo, hi] exists iff wrapped <= hi (tolerance for limits hit exactly)
+        near_hi = np.abs(wrapped - TWO_PI - lo) < 1e-9
+        wrapped = np.where(near_hi, lo, wrapped)
+        fits = wrapped <= hi + 1e-9
+        q = np.where(fits, wrapped, out)
+        q = np.where(ok[..., None], q, np.nan)
+        in_limits = ok & np.all(fits, axis=-1)
+        return q, ok, in_limits
+
+    def _branches_one(self, x: float, y: float, z: float, phi: float) -> list[tuple[float, ...] | None]:
+        """Scalar :meth:`ik_all` without limit handling: four raw branches or None."""
+        dx, dy = x - self.base_xy[0], y - self.base_xy[1]
+        lf = self.lateral_offset
+        rho2 = dx * dx + dy * dy - lf * lf
+        if rho2 < 0:
+            return [None, None, None, None]
+        rho = math.sqrt(rho2)
+        psi_t = phi + self.pitch_offset
+        a, b, tl = self.upper_arm, self.forearm, self.tool
+        bearing = math.atan2(dy, dx)
+        ct, st = math.cos(psi_t), math.sin(psi_t)
+        zw = z - self.shoulder_height - tl * st
+        twoab = 2 * a * b
+        base2 = zw * zw - a * a - b * b
+        out: list[tuple[float, ...] | None] = []
+        for r in (rho, -rho):
+            rw = r - tl * ct
+            c3 = (rw * rw + base2) / twoab
+            if c3 > 1.0 or c3 < -1.0:
+                if abs(c3) > 1 + 1e-12:
+                    out += [None, None]
+                    continue
+                c3 = max(-1.0, min(1.0, c3))
+            q1 = bearing + math.atan2(lf, r) - self.yaw_offset
+            s3 = math.sqrt(1.0 - c3 * c3)
+            base_ang = math.atan2(zw, rw)
+            k_c = a + b * c3
+            ks = b * s3
+            for q3, k_s in ((-math.acos(c3), -ks), (math.acos(c3), ks)):
+                psi_a = base_ang - math.atan2(k_s, k_c)
+                out.append((q1, psi_a - self.pitch_offset, q3, psi_t - psi_a - q3))
+        return out
+
+    def ik_fast(
+        self, x: float, y: float, z: float, phi: float, current: tuple[float, ...] | None = None
+    ) -> tuple[float, float, float, float] | None:
+        """:meth:`ik` for plain floats, without input checks: a tuple, or None if impossible.
+
+        The microsecond path for control loops and benchmarks (no numpy on the way).
+        """
+        best, best_cost = None, math.inf
+        for qb in self._branches_one(x, y, z, phi):
+            if qb is None:
+                continue
+            qw = []
+            for qi, (lo, hi) in zip(qb, self._lim):  # type: ignore[attr-defined]
+                w = lo + (qi - lo) % TWO_PI
+                if w > hi + 1e-9:
+                    if w - TWO_PI - lo > -1e-9:
+                        w = lo
+                    else:
+                        break
+                qw.append(w)
+            else:
+                if current is None:
+                    return tuple(qw)  # type: ignore[return-value]
+                cost = (abs(qw[0] - current[0]) + abs(qw[1] - current[1])
+                        + abs(qw[2] - current[2]) + abs(qw[3] - current[3]))
+                if cost < best_cost:
+                    best, best_cost = qw, cost
+        return None if best is None else tuple(best)  # type: ignore[return-value]
+
+    def ik(
+        self,
+        target: object,
+        current: object | None = None,
+        branch: int | None = None,
+    ) -> np.ndarray:
+        """Joint angles reaching ``target = (x, y, z, phi)`` inside the joint limits.
+
+        Picks the in-limit branch nearest ``current`` (sum of absolute joint differences,
+        seed 002's rule); without ``current``, the first in-limit branch of
+        :data:`BRANCHES`. ``branch`` forces one branch.
+
+        Raises:
+            InvalidInputError: target not 4 finite numbers (or branch not 0..3).
+            UnreachableError: no branch reaches the point (message gives the reach).
+            JointLimitError: reachable, but every branch violates a limit.
+        """
+        t = as_array("target", target, (4,))
+        if t.shape != (4,):
+            raise InvalidInputError(f"target has shape {t.shape}; expected (4,) - use ik_all for batches")
+        cur = None if current is None else as_array("current", current, (4,))
+        if cur is not None and cur.shape != (4,):
+            raise InvalidInputError(f"current has shape {cur.shape}; expected (4,)")
+        if branch is not None and branch not in range(4):
+            raise InvalidInputError(f"branch={branch!r}; expected 0..3 ({', '.join(BRANCHES)})")
+        raw = self._branches_one(*map(float, t))
+        best, best_cost, reachable = None, math.inf, False
+        for k, qb in enumerate(raw):
+            if qb is None or (branch is not None and k != branch):
+                continue
+            reachable = True
+            qw = []
+            for qi, (lo, hi) in zip(qb, self._lim):  # type: ignore[attr-defined]
+                w = lo + (qi - lo) % TWO_PI
+                if w > hi + 1e-9:
+                    if abs(w - TWO_PI - lo) < 1e-9:
+                        w = lo
+                    else:
+                        break
+                qw.append(w)
+            else:
+                if cur is None:
+                    return np.array(qw)
+                cost = sum(abs(a - b) for a, b in zip(qw, cur))
+                if cost < best_cost:
+                    best, best_cost = qw, cost
+        if best is not None:
+            return np.array(best)
+        x, y, z, phi = map(float, t)
+        if not reachable:
+            reach = self.upper_arm + self.forearm
+            raise UnreachableError(
+                f"target (x={x:.4g}, y={y:.4g}, z={z:.4g} cm, phi={math.degrees(phi):.4g} deg) is out "
+                f"of reach of arm '{self.name}': the wrist point must lie within "
+                f"{abs(self.upper_arm - self.forearm):.4g}..{reach:.4g} cm of the shoulder",
+                target=[x, y, z, phi],
+            )
+        raise JointLimitError(
+            f"target (x={x:.4g}, y={y:.4g}, z={z:.4g} cm, phi={math.degrees(phi):.4g} deg) is "
+            f"reachable by arm '{self.name}' only outside its joint limits "
+            f"{np.degrees(self.limits).round(1).tolist()} deg",
+            target=[x, y, z, phi],
+        )
