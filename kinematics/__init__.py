@@ -1,1 +1,29 @@
-"""Kinematics."""
+"""Analytic and numeric kinematics of the kinegym robots (pure numpy, no physics engine).
+
+* :mod:`kinematics.climber` - three-armed climber: FK, closed-form IK, seed 000's inverse program;
+* :mod:`kinematics.localization` - hole maps of walls;
+* :mod:`kinematics.chains` - Denavit-Hartenberg and product-of-exponentials chains, Jacobians;
+* :mod:`kinematics.ik` - numeric IK (CCD, Levenberg-Marquardt DLS) with one result type;
+* :mod:`kinematics.writing_arm` - the 4-DOF writing arm: FK, every closed-form IK branch;
+* :mod:`kinematics.errors` - the named exceptions.
+
+Lengths in cm, angles in radians.
+"""
+
+from .chains import DHChain, DHLink, PoEChain
+from .climber import ClimberGeometry, arm_ik, hand_positions, inverse_program
+from .errors import (
+    InvalidInputError,
+    JointLimitError,
+    KinematicsError,
+    UnreachableError,
+)
+from .ik import IKResult, ccd, dls, solve_arm
+from .localization import HoleMap
+from .writing_arm import WritingArm
+
+__all__ = [
+    "ClimberGeometry", "DHChain", "DHLink", "HoleMap", "IKResult", "InvalidInputError",
+    "JointLimitError", "KinematicsError", "PoEChain", "UnreachableError", "WritingArm",
+    "arm_ik", "ccd", "dls", "hand_positions", "inverse_program", "solve_arm",
+]

@@ -218,7 +218,7 @@ class DHChain:
         base_p = [repr(float(b[r, 3])) for r in range(3)]
         frames: list[tuple[list[list[str]], list[str]]] = []
         outputs: list[str] = []
-        for i, lk in enumerate(self.links):
+        for lk in self.links:
             cols, p = (base_r, base_p) if lk.parent == -1 else frames[lk.parent]  # type: ignore[index]
             r0, r1, r2 = cols
             ca, sa = _clean(math.cos(lk.alpha)), _clean(math.sin(lk.alpha))
@@ -268,24 +268,39 @@ class DHChain:
     def _check_q(self, q: object) -> np.ndarray:
         return as_array("q", q, (self.n_joints,))
 
+    @staticmethod
+    def _to_pose(comps: tuple, out: np.ndarray) -> None:
+        """Write one frame's 12 components (scalars or arrays) into ``out (..., 4, 4)``."""
+        for k in range(9):
+            out[..., k // 3, k % 3] = comps[k]
+        for k in range(3):
+            out[..., k, 3] = comps[9 + k]
+        out[..., 3, :3] = 0.0
+        out[..., 3, 3] = 1.0
+
     def frames(self, q: object) -> np.ndarray:
         """Poses of every frame, shape ``(..., n_frames, 4, 4)`` (world coordinates)."""
         qa = self._check_q(q)
-        batch = qa.shape[:-1]
-        flat = qa.reshape(-1, self.n_joints)
-        comps = self._fk_array(*flat.T)
-        out = np.zeros((flat.shape[0], self.n_frames, 4, 4))
+        if qa.ndim == 1:
+            comps = self._fk_scalar(*qa.tolist())
+        else:
+            comps = self._fk_array(*np.moveaxis(qa, -1, 0))
+        out = np.empty(qa.shape[:-1] + (self.n_frames, 4, 4))
         for i, c in enumerate(comps):
-            vals = np.broadcast_arrays(*[np.asarray(v, dtype=np.float64) for v in c],
-                                       np.empty(flat.shape[0]))[:-1]
-            out[:, i, :3, :3] = np.stack(vals[:9], axis=-1).reshape(-1, 3, 3)
-            out[:, i, :3, 3] = np.stack(vals[9:], axis=-1)
-        out[:, :, 3, 3] = 1.0
-        return out.reshape(*batch, self.n_frames, 4, 4)
+            self._to_pose(c, out[..., i, :, :])
+        return out
 
     def fk(self, q: object, frame: int | str = -1) -> np.ndarray:
         """Pose of one frame (default: the last link), shape ``(..., 4, 4)``."""
-        return self.frames(q)[..., self.frame_index(frame), :, :]
+        qa = self._check_q(q)
+        idx = self.frame_index(frame)
+        if qa.ndim == 1:
+            c = self._fk_scalar(*qa.tolist())[idx]
+            return np.array([[c[0], c[1], c[2], c[9]], [c[3], c[4], c[5], c[10]],
+                             [c[6], c[7], c[8], c[11]], [0.0, 0.0, 0.0, 1.0]])
+        out = np.empty(qa.shape[:-1] + (4, 4))
+        self._to_pose(self._fk_array(*np.moveaxis(qa, -1, 0))[idx], out)
+        return out
 
     def fk_fast(self, *q: float, frame: int = -1) -> tuple[float, ...]:
         """One configuration, plain floats in and out: ``(r00, r01, ..., r22, px, py, pz)``.

@@ -1,0 +1,135 @@
+"""Headless drawing of walls, climbers and arms with OpenCV: pictures in cm, PNG files out.
+
+One small :class:`Canvas` maps world coordinates (cm, y up) to pixels and draws
+anti-aliased shapes and labels into an RGB ``uint8`` array. The CLI uses it for its
+PNGs and the environments for ``render_mode="rgb_array"``; no display is ever needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
+from kinematics.localization import HoleMap
+
+__all__ = ["Canvas", "draw_wall", "draw_climber", "ARM_COLOURS"]
+
+Colour = tuple[int, int, int]
+#: One colour per climber arm (RGB), in label order.
+ARM_COLOURS: tuple[Colour, ...] = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
+_BG: Colour = (250, 248, 242)
+_INK: Colour = (40, 40, 40)
+
+
+class Canvas:
+    """An RGB image showing the world box ``[x0, x1] x [y0, y1]`` cm at ``scale`` px/cm."""
+
+    def __init__(self, x0: float, y0: float, x1: float, y1: float, scale: float = 8.0,
+                 background: Colour = _BG) -> None:
+        if not (x1 > x0 and y1 > y0 and scale > 0):
+            raise ValueError(f"empty canvas box ({x0}, {y0})-({x1}, {y1}) at scale {scale}")
+        self.x0, self.y0, self.scale = x0, y0, scale
+        self.width = int(np.ceil((x1 - x0) * scale))
+        self.height = int(np.ceil((y1 - y0) * scale))
+        self._y1 = y1
+        self.background = np.empty((self.height, self.width, 3), np.uint8)
+        self.background[...] = background
+        self.image = self.background.copy()
+
+    def clear(self) -> None:
+        """Reset to the background (a copy, no per-pixel Python work)."""
+        np.copyto(self.image, self.background)
+
+    def px(self, pts: object) -> np.ndarray:
+        """World points ``(..., 2)`` cm -> integer pixel coordinates ``(..., 2)``."""
+        p = np.asarray(pts, dtype=np.float64)
+        u = (p[..., 0] - self.x0) * self.scale
+        v = (self._y1 - p[..., 1]) * self.scale
+        return np.rint(np.stack([u, v], axis=-1)).astype(np.int32)
+
+    def line(self, a: object, b: object, colour: Colour = _INK, width: float = 0.3) -> None:
+        """Segment from ``a`` to ``b`` (cm), ``width`` in cm."""
+        pa, pb = self.px(a), self.px(b)
+        cv2.line(self.image, tuple(map(int, pa)), tuple(map(int, pb)), colour,
+                 max(1, round(width * self.scale)), cv2.LINE_AA)
+
+    def polyline(self, pts: object, colour: Colour = _INK, width: float = 0.3,
+                 closed: bool = False) -> None:
+        p = self.px(pts).reshape(-1, 1, 2)
+        cv2.polylines(self.image, [p], closed, colour, max(1, round(width * self.scale)),
+                      cv2.LINE_AA)
+
+    def circle(self, c: object, radius: float, colour: Colour = _INK, fill: bool = True,
+               width: float = 0.2) -> None:
+        """Circle of ``radius`` cm; filled or outlined."""
+        pc = self.px(c)
+        thick = -1 if fill else max(1, round(width * self.scale))
+        cv2.circle(self.image, tuple(map(int, pc)), max(1, round(radius * self.scale)), colour,
+                   thick, cv2.LINE_AA)
+
+    def text(self, at: object, label: str, colour: Colour = _INK, size: float = 0.45,
+             offset_px: tuple[int, int] = (4, -4)) -> None:
+        p = self.px(at)
+        cv2.putText(self.image, label, (int(p[0]) + offset_px[0], int(p[1]) + offset_px[1]),
+                    cv2.FONT_HERSHEY_SIMPLEX, size, colour, 1, cv2.LINE_AA)
+
+    def caption(self, lines: Sequence[str], colour: Colour = _INK) -> None:
+        """Text lines in the top-left corner (pixel placement)."""
+        for i, s in enumerate(lines):
+            cv2.putText(self.image, s, (8, 18 + 18 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour, 1,
+                        cv2.LINE_AA)
+
+    def save(self, path: str | Path) -> Path:
+        """Write a PNG (creating folders); returns the path."""
+        out = Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if not cv2.imwrite(str(out), cv2.cvtColor(self.image, cv2.COLOR_RGB2BGR)):
+            raise OSError(f"could not write image {out}")
+        return out
+
+
+def fit_canvas(points: object, margin: float = 12.0, scale: float = 8.0) -> Canvas:
+    """A canvas that shows every point ``(N, 2)`` with ``margin`` cm around."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    lo, hi = p.min(0) - margin, p.max(0) + margin
+    return Canvas(lo[0], lo[1], hi[0], hi[1], scale)
+
+
+def draw_wall(canvas: Canvas, holes: HoleMap, labels: bool = True) -> None:
+    """Holes as rings with their ``(col, row)`` ids (seed 000's part 4.1 chart)."""
+    for hid, xy in zip(holes.ids, holes.xy):
+        canvas.circle(xy, 1.0, (120, 120, 120), fill=False, width=0.25)
+        if labels:
+            canvas.text(xy, f"{hid[0]},{hid[1]}", (130, 130, 130), size=0.35, offset_px=(6, 14))
+
+
+def draw_climber(canvas: Canvas, pose: object, q: object, geom: ClimberGeometry,
+                 alpha: float = 1.0, label: bool = True) -> None:
+    """The robot at ``pose = (x, y, heading)``: body, links, elbows, hands (seed's part 4.2).
+
+    ``alpha`` < 1 draws a faded ghost (e.g. an estimated pose beside the true one).
+    """
+    pose = np.asarray(pose, dtype=np.float64)
+    shoulders = body_to_wall(geom.shoulders, pose)
+    elbows = body_to_wall(elbow_positions(q, geom), pose)
+    hands = body_to_wall(hand_positions(q, geom), pose)
+
+    def tone(c: Colour) -> Colour:
+        return tuple(int(round(alpha * v + (1 - alpha) * b)) for v, b in zip(c, _BG))  # type: ignore[return-value]
+
+    canvas.polyline(hands, tone((150, 150, 150)), 0.15, closed=True)
+    for i in range(3):
+        col = tone(ARM_COLOURS[i])
+        canvas.line(shoulders[i], elbows[i], col, 0.6)
+        canvas.line(elbows[i], hands[i], col, 0.45)
+        canvas.circle(elbows[i], 0.7, col)
+        canvas.circle(hands[i], 1.1, col, fill=False, width=0.35)
+        if label:
+            canvas.text(hands[i], f"arm {i + 1}", col, size=0.45, offset_px=(8, -8))
+    canvas.circle(pose[:2], 2.2, tone((60, 60, 60)))
+    head = pose[:2] + 3.5 * np.array([np.cos(pose[2]), np.sin(pose[2])])
+    canvas.line(pose[:2], head, tone((250, 250, 250)), 0.35)

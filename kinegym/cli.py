@@ -1,0 +1,354 @@
+"""The ``kinegym`` command line: the main demo and the kinematics tools.
+
+Conventions (user-facing contract): degrees at the command line, cm for lengths; ``--json``
+prints one machine-readable object; exit code 0 = done, 2 = bad input (one line naming the
+value), 3 = a well-formed question with no answer (unreachable target, ...), still valid
+JSON with ``--json``.
+
+Heavy modules (OpenCV drawing, later pymunk) are imported inside the commands, so
+``kinegym --help`` is instant and ``import kinegym`` stays light.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+
+__all__ = ["main", "UsageError"]
+
+EXIT_OK, EXIT_USAGE, EXIT_NO_ANSWER = 0, 2, 3
+
+
+class UsageError(ValueError):
+    """Bad command-line input; the message names the option and the value."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:  # one line, no usage dump
+        raise UsageError(f"{self.prog}: {message}")
+
+
+# ---------------------------------------------------------------------------- parsing
+def parse_floats(text: str, n: int, option: str) -> list[float]:
+    """``"1,2,3"`` -> ``[1.0, 2.0, 3.0]`` with exactly ``n`` finite numbers."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        vals = []
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        shape = ",".join("N" * 1 for _ in range(n))
+        raise UsageError(f"{option} {text!r} is not {n} finite numbers like {shape}")
+    return vals
+
+
+def parse_triples(text: str, option: str, width: int = 2) -> np.ndarray:
+    """``"a,b;c,d;e,f"`` -> a (3, width) array (one group per arm)."""
+    groups = [g for g in text.split(";")]
+    if len(groups) != 3:
+        example = ";".join([",".join(["N"] * width)] * 3)
+        raise UsageError(f"{option} {text!r} is not 3 groups like {example!r}")
+    return np.array([parse_floats(g, width, option) for g in groups])
+
+
+# ---------------------------------------------------------------------------- output
+def _emit(args: argparse.Namespace, obj: dict[str, Any], text: str) -> None:
+    if getattr(args, "json", False):
+        print(json.dumps(obj))
+    else:
+        print(text)
+
+
+def _round(x: Any, nd: int = 6) -> Any:
+    if isinstance(x, np.ndarray):
+        return np.round(x, nd).tolist()
+    if isinstance(x, float):
+        return round(x, nd)
+    return x
+
+
+# ---------------------------------------------------------------------------- commands
+def cmd_ik_climber(args: argparse.Namespace) -> int:
+    from kinematics.climber import hand_positions, inverse_program, wall_to_body
+
+    holes = parse_triples(args.holes, "--holes")
+    centre = parse_floats(args.center, 2, "--center")
+    geom = _climber_geometry(args)
+    heading = math.radians(args.heading)
+    q = inverse_program(holes, centre, heading, geom, branch=args.branch)
+    hands = hand_positions(q, geom)
+    resid = float(np.abs(hands - wall_to_body(holes, [*centre, heading])).max())
+    qd = np.degrees(q)
+    lines = [f"climber IK: centre ({centre[0]:g}, {centre[1]:g}) cm, heading {args.heading:g} deg,"
+             f" links {geom.l1[0]:g}/{geom.l2[0]:g} cm",
+             "arm  hole (cm)            shoulder (deg)  elbow (deg)"]
+    for i in range(3):
+        lines.append(f"{i + 1:>3}  ({holes[i, 0]:8.3f}, {holes[i, 1]:8.3f})  {qd[i, 0]:14.4f}  "
+                     f"{qd[i, 1]:11.4f}")
+    lines.append(f"round trip (FK of these angles vs holes): {resid:.2e} cm")
+    if args.plot:
+        _plot_climber(args.plot, holes, [*centre, heading], q, geom, None)
+        lines.append(f"plot: {args.plot}")
+    _emit(args, {"angles_deg": _round(qd), "centre_cm": centre, "heading_deg": args.heading,
+                 "holes_cm": holes.tolist(), "roundtrip_error_cm": resid,
+                 "plot": args.plot}, "\n".join(lines))
+    return EXIT_OK
+
+
+def cmd_fk_climber(args: argparse.Namespace) -> int:
+    from kinematics.climber import body_to_wall, elbow_positions, hand_positions
+
+    q = np.radians(parse_triples(args.angles, "--angles"))
+    pose = parse_floats(args.pose, 3, "--pose")
+    pose[2] = math.radians(pose[2])
+    geom = _climber_geometry(args)
+    hands = body_to_wall(hand_positions(q, geom), pose)
+    elbows = body_to_wall(elbow_positions(q, geom), pose)
+    lines = ["arm  hand x, y (cm)         elbow x, y (cm)"]
+    for i in range(3):
+        lines.append(f"{i + 1:>3}  ({hands[i, 0]:8.3f}, {hands[i, 1]:8.3f})   "
+                     f"({elbows[i, 0]:8.3f}, {elbows[i, 1]:8.3f})")
+    d = np.linalg.norm(hands - np.roll(hands, -1, axis=0), axis=1)
+    lines.append(f"hand distances 1-2, 2-3, 3-1: {d[0]:.4f}, {d[1]:.4f}, {d[2]:.4f} cm")
+    _emit(args, {"hands_cm": _round(hands), "elbows_cm": _round(elbows),
+                 "hand_distances_cm": _round(d)}, "\n".join(lines))
+    return EXIT_OK
+
+
+def cmd_ik_arm(args: argparse.Namespace) -> int:
+    from kinematics.writing_arm import BRANCHES, WritingArm
+
+    arm = WritingArm.from_config(args.arm)
+    x, y, z = parse_floats(args.target, 3, "--target")
+    target = [x, y, z, math.radians(args.phi)]
+    qs, reachable, inlim = arm.ik_all(target)
+    cur = None if args.current is None else np.radians(parse_floats(args.current, 4, "--current"))
+    q = arm.ik(target, current=cur)  # raises Unreachable/JointLimit -> exit 3
+    lines = [f"arm '{arm.name}': target ({x:g}, {y:g}, {z:g}) cm, phi {args.phi:g} deg",
+             "branch          q1       q2       q3       q4 (deg)   in limits"]
+    for k, name in enumerate(BRANCHES):
+        if reachable[k]:
+            qd = np.degrees(qs[k])
+            lines.append(f"{name:<13} {qd[0]:8.3f} {qd[1]:8.3f} {qd[2]:8.3f} {qd[3]:8.3f}   "
+                         f"{'yes' if inlim[k] else 'no'}")
+        else:
+            lines.append(f"{name:<13}   unreachable")
+    err = float(np.linalg.norm(arm.fk(q)[:3] - target[:3]))
+    lines.append(f"chosen: {np.degrees(q).round(4).tolist()} deg"
+                 f"{' (nearest --current)' if cur is not None else ''}; FK error {err:.1e} cm")
+    lines.append(f"servo angles: {np.degrees(arm.to_servo(q)).round(4).tolist()} deg")
+    _emit(args, {"arm": arm.name, "target": [x, y, z, args.phi],
+                 "branches": [{"name": n, "reachable": bool(reachable[k]),
+                               "in_limits": bool(inlim[k]),
+                               "q_deg": _round(np.degrees(qs[k])) if reachable[k] else None}
+                              for k, n in enumerate(BRANCHES)],
+                 "q_deg": _round(np.degrees(q)), "servo_deg": _round(np.degrees(arm.to_servo(q))),
+                 "fk_error_cm": err}, "\n".join(lines))
+    return EXIT_OK
+
+
+def cmd_fk_arm(args: argparse.Namespace) -> int:
+    from kinematics.writing_arm import WritingArm
+
+    arm = WritingArm.from_config(args.arm)
+    q = np.radians(parse_floats(args.q, 4, "--q"))
+    x, y, z, phi = arm.fk(q)
+    _emit(args, {"arm": arm.name, "x_cm": x, "y_cm": y, "z_cm": z, "phi_deg": math.degrees(phi)},
+          f"arm '{arm.name}': pen tip ({x:.4f}, {y:.4f}, {z:.4f}) cm, phi {math.degrees(phi):.4f} deg")
+    return EXIT_OK
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from kinematics.climber import (
+        ClimberGeometry,
+        body_to_wall,
+        hand_positions,
+        inverse_program,
+    )
+    from kinematics.localization import HoleMap
+    from kinematics.writing_arm import WritingArm
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    rows: list[tuple[str, str, str]] = []
+    files: list[str] = []
+
+    # 1. seed 000's inverse example, reproduced
+    geom = ClimberGeometry.from_config("climber")
+    seed_q = np.array([[-69.4851, 101.1454], [72.5795, 88.3680], [170.0409, 61.2544]])
+    q = inverse_program([[20, 0], [0, 20], [0, 0]], [6.6289, 7.7378], 0.0, geom)
+    dev = float(np.abs(np.degrees(q) - seed_q).max())
+    rows.append(("seed 000 inverse example", f"max deviation from the printed angles {dev:.1e} deg",
+                 "reproduced" if dev < 1e-3 else "MISMATCH"))
+
+    # 2. the robot on the seed's wall: holes (4,3), (3,3), (3,2), centre inside the triangle
+    wall = HoleMap.from_config("seed_4x4")
+    held = [(4, 3), (3, 3), (3, 2)]
+    holes = np.array([wall.position(h) for h in held])
+    centre = holes.mean(axis=0)
+    q_wall = inverse_program(holes, centre, 0.0, geom)
+    hands = body_to_wall(hand_positions(q_wall, geom), [*centre, 0.0])
+    resid = float(np.abs(hands - holes).max())
+    rows.append(("climber IK -> FK on seed_4x4", f"holes {held}, centre ({centre[0]:.3f}, "
+                 f"{centre[1]:.3f}) cm, hands land within {resid:.1e} cm", "ok" if resid < 1e-9 else "FAIL"))
+    png = _plot_climber(out / "climber_on_seed_wall.png", holes, [*centre, 0.0], q_wall, geom, wall)
+    files.append(str(png))
+
+    # 3. the writing arm: every IK branch of seed 002's task 6.4 points, FK round trip
+    arm = WritingArm.from_config("pincher")
+    pts = np.array([[12, 7, 5], [-10, 8, 10], [-13, -13, 4], [8, -12, 6], [15, 0, 7]], float)
+    targets = np.concatenate([pts, np.full((5, 1), -math.pi / 2)], axis=1)
+    qs, reach, inlim = arm.ik_all(targets)
+    f = arm.fk(np.where(reach[..., None], qs, 0.0))
+    err = float(np.max(np.where(reach, np.linalg.norm(f[..., :3] - targets[:, None, :3], axis=-1), 0)))
+    rows.append(("Pincher IK, seed 002 task 6.4", f"{int(reach.sum())} branches for 5 targets, "
+                 f"{int(inlim.sum())} in limits, FK error <= {err:.1e} cm", "ok" if err < 1e-9 else "FAIL"))
+
+    elapsed = time.perf_counter() - t_start
+    width = max(len(r[0]) for r in rows)
+    lines = ["kinegym demo", ""] + [f"{a:<{width}}  {c:<10} {b}" for a, b, c in rows]
+    lines += ["", f"done in {elapsed:.2f} s; files:"] + [f"  {p}" for p in files]
+    _emit(args, {"steps": [{"step": a, "result": b, "status": c} for a, b, c in rows],
+                 "files": files, "seconds": elapsed}, "\n".join(lines))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- helpers
+def _climber_geometry(args: argparse.Namespace) -> Any:
+    from kinematics.climber import ClimberGeometry
+
+    if args.link is None:
+        return ClimberGeometry.from_config(args.robot)
+    if not (math.isfinite(args.link) and args.link > 0):
+        raise UsageError(f"--link {args.link!r} is not a length > 0 cm")
+    return ClimberGeometry.uniform(args.link)
+
+
+def _plot_climber(path: str | Path, holes: np.ndarray, pose: Sequence[float], q: np.ndarray,
+                  geom: Any, wall: Any) -> Path:
+    from envs.draw import draw_climber, draw_wall, fit_canvas
+
+    pts = holes if wall is None else np.concatenate([wall.xy, holes])
+    canvas = fit_canvas(pts, margin=14.0, scale=9.0)
+    if wall is not None:
+        draw_wall(canvas, wall)
+    for h in holes:
+        canvas.circle(h, 1.0, (90, 90, 90), fill=False, width=0.3)
+    draw_climber(canvas, pose, q, geom)
+    qd = np.degrees(q)
+    canvas.caption([f"centre ({pose[0]:.2f}, {pose[1]:.2f}) cm, heading {math.degrees(pose[2]):.1f} deg"]
+                   + [f"arm {i + 1}: shoulder {qd[i, 0]:.2f}, elbow {qd[i, 1]:.2f} deg" for i in range(3)])
+    return canvas.save(path)
+
+
+# ---------------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="kinegym", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    def common(sp: argparse.ArgumentParser) -> None:
+        sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+    d = sub.add_parser("demo", help="the main job on built-in defaults (writes PNGs to --out)")
+    d.add_argument("--out", default="kinegym-out", help="output folder (default: ./kinegym-out)")
+    common(d)
+    d.set_defaults(func=cmd_demo)
+
+    def climber_opts(sp: argparse.ArgumentParser) -> None:
+        sp.add_argument("--link", type=float, default=None,
+                        help="all six link lengths in cm (default: from --robot)")
+        sp.add_argument("--robot", default="climber",
+                        help="robot config name or YAML path (default: climber)")
+
+    ik = sub.add_parser("ik", help="inverse kinematics").add_subparsers(dest="which", required=True,
+                                                                       parser_class=_Parser)
+    ic = ik.add_parser("climber", help="three holes + wanted centre -> six joint angles (deg)")
+    ic.add_argument("--holes", required=True, help='hole of arm 1, 2, 3 in cm: "X,Y;X,Y;X,Y"')
+    ic.add_argument("--center", required=True, help="wanted body centre X,Y in cm")
+    ic.add_argument("--heading", type=float, default=0.0, help="body heading in deg (default 0)")
+    ic.add_argument("--branch", type=int, choices=(1, -1), default=1,
+                    help="elbow branch: 1 = elbow angle 0..180 deg (seed), -1 = 180..360")
+    ic.add_argument("--plot", default=None, help="write a PNG of the robot to this file")
+    climber_opts(ic)
+    common(ic)
+    ic.set_defaults(func=cmd_ik_climber)
+
+    ia = ik.add_parser("arm", help="pen pose -> joint angles of the writing arm (all branches)")
+    ia.add_argument("--target", required=True, help="pen tip X,Y,Z in cm")
+    ia.add_argument("--phi", type=float, default=-90.0,
+                    help="pen pitch q2+q3+q4 in deg (default -90: pen down on the Pincher)")
+    ia.add_argument("--current", default=None, help="current joint angles Q1,Q2,Q3,Q4 in deg")
+    ia.add_argument("--arm", default="pincher", help="arm config name or YAML path")
+    common(ia)
+    ia.set_defaults(func=cmd_ik_arm)
+
+    fk = sub.add_parser("fk", help="forward kinematics").add_subparsers(dest="which", required=True,
+                                                                       parser_class=_Parser)
+    fc = fk.add_parser("climber", help="six joint angles (deg) -> hands and elbows (cm)")
+    fc.add_argument("--angles", required=True, help='shoulder,elbow per arm: "S1,E1;S2,E2;S3,E3"')
+    fc.add_argument("--pose", default="0,0,0", help="body pose X,Y,HEADING (cm, cm, deg)")
+    climber_opts(fc)
+    common(fc)
+    fc.set_defaults(func=cmd_fk_climber)
+
+    fa = fk.add_parser("arm", help="joint angles (deg) -> pen tip (cm) and pitch (deg)")
+    fa.add_argument("--q", required=True, help="Q1,Q2,Q3,Q4 in deg")
+    fa.add_argument("--arm", default="pincher", help="arm config name or YAML path")
+    common(fa)
+    fa.set_defaults(func=cmd_fk_arm)
+    return p
+
+
+def _glue_negative_values(argv: list[str]) -> list[str]:
+    """``--angles -24,85;...`` -> ``--angles=-24,85;...`` (argparse would read an option)."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        nxt = argv[i + 1] if i + 1 < len(argv) else ""
+        if tok.startswith("--") and "=" not in tok and len(nxt) > 1 and nxt[0] == "-" and (
+            nxt[1].isdigit() or nxt[1] == "."
+        ):
+            out.append(f"{tok}={nxt}")
+            i += 2
+        else:
+            out.append(tok)
+            i += 1
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point; returns the exit code (also used by the ``kinegym`` script)."""
+    from configs import ConfigError
+    from kinematics.errors import InvalidInputError, UnreachableError
+
+    argv = _glue_negative_values(list(sys.argv[1:] if argv is None else argv))
+    want_json = "--json" in argv
+    handlers: list[tuple[type[BaseException], int]] = [
+        (UsageError, EXIT_USAGE), (ConfigError, EXIT_USAGE), (InvalidInputError, EXIT_USAGE),
+        (UnreachableError, EXIT_NO_ANSWER),
+    ]
+    try:
+        args = build_parser().parse_args(argv)
+        func: Callable[[argparse.Namespace], int] = args.func
+        return func(args)
+    except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]
+        code = next(c for t, c in handlers if isinstance(exc, t))
+        if want_json:
+            print(json.dumps({"error": type(exc).__name__, "message": str(exc),
+                              **getattr(exc, "details", {})}))
+        print(f"kinegym: {exc}" if not str(exc).startswith("kinegym") else str(exc), file=sys.stderr)
+        return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

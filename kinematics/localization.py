@@ -1,0 +1,119 @@
+"""Maps of holes on a wall, for the climber to grip and to localise itself against.
+
+A :class:`HoleMap` is a set of holes, each with an id ``(col, row)`` and a position in cm
+(wall frame, x to the right, y up). Maps come from YAML (``configs/walls/*.yaml``; the
+seed's measured 4 x 4 map is ``seed_4x4``) or are generated as a jittered grid with
+missing holes, reproducibly from a seed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+import configs as _configs
+
+from .errors import InvalidInputError, as_array
+
+__all__ = ["HoleMap", "WALL_SCHEMA"]
+
+WALL_SCHEMA: dict[str, _configs.Spec] = {
+    "name": _configs.Text(default="wall"),
+    "description": _configs.Text(default=""),
+    "holes": _configs.ListOf(
+        item=_configs.Section(fields={
+            "id": _configs.Vector(length=2, item=_configs.Number(integer=True)),
+            "xy_cm": _configs.Vector(length=2),
+        }),
+        min_len=1,
+        doc="holes with id [col, row] and position xy_cm",
+    ),
+}
+
+
+@dataclass(frozen=True)
+class HoleMap:
+    """Holes of a wall: ``ids`` (N, 2) integer ``(col, row)`` and ``xy`` (N, 2) in cm."""
+
+    ids: np.ndarray
+    xy: np.ndarray
+    name: str = "wall"
+
+    def __post_init__(self) -> None:
+        xy = as_array("xy", self.xy, (2,))
+        ids = np.asarray(self.ids)
+        if xy.ndim != 2 or xy.shape[0] == 0:
+            raise InvalidInputError(f"xy has shape {xy.shape}; expected (N, 2) with N >= 1 holes")
+        if ids.shape != xy.shape or not np.issubdtype(ids.dtype, np.integer):
+            raise InvalidInputError(
+                f"ids has shape {ids.shape} and dtype {ids.dtype}; expected integers of shape {xy.shape}"
+            )
+        keys = [tuple(map(int, i)) for i in ids]
+        if len(set(keys)) != len(keys):
+            dup = next(k for k in keys if keys.count(k) > 1)
+            raise InvalidInputError(f"hole id {dup} appears more than once; ids must be unique")
+        object.__setattr__(self, "xy", xy)
+        object.__setattr__(self, "ids", ids.astype(np.int64))
+        object.__setattr__(self, "_index", {k: n for n, k in enumerate(keys)})
+
+    def __len__(self) -> int:
+        return int(self.xy.shape[0])
+
+    def index(self, hole_id: tuple[int, int]) -> int:
+        """Row of hole ``(col, row)``; raises ``KeyError`` naming the id."""
+        key = tuple(int(v) for v in hole_id)
+        try:
+            return self._index[key]  # type: ignore[attr-defined]
+        except KeyError:
+            raise KeyError(f"no hole {key} in map '{self.name}' ({len(self)} holes)") from None
+
+    def position(self, hole_id: tuple[int, int]) -> np.ndarray:
+        """Position (cm) of hole ``(col, row)``."""
+        return self.xy[self.index(hole_id)].copy()
+
+    @classmethod
+    def from_config(cls, name_or_path: str | Path = "seed_4x4") -> HoleMap:
+        """Load ``configs/walls/<name>.yaml`` or a YAML path; raises ``configs.ConfigError``."""
+        cfg = _configs.load("walls", name_or_path, WALL_SCHEMA)
+        ids = np.array([h["id"] for h in cfg["holes"]], dtype=np.int64)
+        xy = np.array([h["xy_cm"] for h in cfg["holes"]], dtype=np.float64)
+        try:
+            return cls(ids=ids, xy=xy, name=cfg["name"])
+        except InvalidInputError as exc:
+            raise _configs.ConfigError(str(_configs.resolve("walls", name_or_path)), "holes",
+                                       "duplicate id", str(exc)) from exc
+
+    @classmethod
+    def grid(
+        cls,
+        cols: int,
+        rows: int,
+        spacing: float = 20.0,
+        jitter: float = 0.0,
+        missing: float = 0.0,
+        seed: int | None = 0,
+        name: str | None = None,
+    ) -> HoleMap:
+        """A ``cols`` x ``rows`` grid, ``spacing`` cm apart, ids from (1, 1) at the origin.
+
+        ``jitter``: each coordinate moved uniformly within +-jitter cm; ``missing``: the
+        share of holes removed (at random, at least one kept). Reproducible from ``seed``.
+        """
+        if not (isinstance(cols, int) and isinstance(rows, int) and cols >= 1 and rows >= 1):
+            raise InvalidInputError(f"cols={cols!r}, rows={rows!r}; expected integers >= 1")
+        if not (np.isfinite(spacing) and spacing > 0):
+            raise InvalidInputError(f"spacing={spacing!r}; expected a length > 0 cm")
+        if not (np.isfinite(jitter) and 0 <= jitter < spacing / 2):
+            raise InvalidInputError(f"jitter={jitter!r}; expected 0 <= jitter < spacing/2 cm")
+        if not (0.0 <= missing < 1.0):
+            raise InvalidInputError(f"missing={missing!r}; expected a share in [0, 1)")
+        rng = np.random.default_rng(seed)
+        c, r = np.meshgrid(np.arange(1, cols + 1), np.arange(1, rows + 1), indexing="ij")
+        ids = np.stack([c.ravel(), r.ravel()], axis=-1)
+        xy = (ids - 1) * float(spacing) + rng.uniform(-jitter, jitter, ids.shape)
+        keep = rng.random(len(ids)) >= missing
+        if not keep.any():
+            keep[rng.integers(len(ids))] = True
+        return cls(ids=ids[keep], xy=xy[keep], name=name or f"grid_{cols}x{rows}")
