@@ -36,6 +36,7 @@ joint limits are given in servo angles, as on the hardware (Pincher: +-150 deg).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -78,6 +79,14 @@ ARM_SCHEMA: dict[str, _configs.Spec] = {
 }
 
 
+# ik_all works on 14 rows of joint values: per reach (front, back) q1, then q2, q3, q4 of
+# each elbow sign; _ROW_OF_OUT maps the 16 (branch, joint) outputs to their rows.
+_ROW_JOINT = np.array([0, 1, 2, 3, 1, 2, 3] * 2)
+_ROW_OF_OUT = np.array([7 * (k // 2) + (0 if j == 0 else 1 + 3 * (k % 2) + j - 1)
+                        for k in range(4) for j in range(4)])
+_IK_CHUNK = 8192  # targets per pass of ik_all: its temporaries stay in the CPU cache
+
+
 def _wrap(a: float) -> float:
     """Angle to (-pi, pi]."""
     return a - TWO_PI * math.floor((a + math.pi) / TWO_PI)
@@ -118,6 +127,11 @@ class WritingArm:
             raise InvalidInputError(f"tool={self.tool!r}; expected a length >= 0 cm")
         # scalar copies for the microsecond path
         object.__setattr__(self, "_lim", [tuple(map(float, r)) for r in lim])
+        # generated numeric-IK kernels of this geometry (filled lazily by kinematics.ik)
+        object.__setattr__(self, "_kernels", {})
+        # per row of ik_all's 14 joint rows: the joint's lower limit and upper limit + 1e-9
+        object.__setattr__(self, "_row_lo", lim[_ROW_JOINT, 0][:, None].copy())
+        object.__setattr__(self, "_row_hi_tol", (lim[_ROW_JOINT, 1] + 1e-9)[:, None])
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -330,44 +344,108 @@ class WritingArm:
             reachable: ``(..., 4)`` the branch exists geometrically;
             in_limits: ``(..., 4)`` it also respects every joint limit.
         Branch order: :data:`BRANCHES`.
+
+        Speed (the same floating-point operations as the plain formulas, bit for bit):
+        one ``arctan2(zw, rw)`` and one ``sin``/``cos``/``arctan2`` of the elbow per reach
+        serve both elbow signs (``sin``, ``arctan2`` odd, ``cos`` even); the 14 distinct
+        joint rows (``q1`` is shared by both elbows) are computed as contiguous rows, in
+        chunks that stay in cache, wrapped with ``fmod`` (what ``np.mod`` computes, without
+        its slow loop), and transposed into the output once.
         """
         t = as_array("target", target, (4,))
-        x, y, z, phi = np.moveaxis(t, -1, 0)
-        dx, dy = x - self.base_xy[0], y - self.base_xy[1]
+        lead = t.shape[:-1]
+        flat = t.reshape(-1, 4)
+        n = flat.shape[0]
+        out = np.empty((n, 4, 4))
+        ok = np.empty((n, 4), dtype=bool)
+        inl = np.empty((n, 4), dtype=bool)
+        step = _IK_CHUNK
+        for s in range(0, n, step):
+            e = min(s + step, n)
+            self._ik_chunk(flat[s:e], out[s:e], ok[s:e], inl[s:e])
+        return out.reshape(lead + (4, 4)), ok.reshape(lead + (4,)), inl.reshape(lead + (4,))
+
+    def _ik_chunk(self, t: np.ndarray, out: np.ndarray, ok: np.ndarray, inl: np.ndarray) -> None:
+        """:meth:`ik_all` on ``t`` (m, 4) into ``out`` (m, 4, 4), ``ok`` and ``inl`` (m, 4)."""
+        m = t.shape[0]
+        tc = np.ascontiguousarray(t.T)
+        x, y, z, phi = tc
+        bx, by = self.base_xy
+        dx = x - bx
+        dy = y - by
         lf = self.lateral_offset
-        rho2 = dx * dx + dy * dy - lf * lf
+        rho2 = dx * dx
+        rho2 += dy * dy
+        rho2 -= lf * lf
         rho = np.sqrt(np.maximum(rho2, 0.0))
         psi_t = phi + self.pitch_offset
         a, b, tl = self.upper_arm, self.forearm, self.tool
         bearing = np.arctan2(dy, dx)
-        zw = z - self.shoulder_height - tl * np.sin(psi_t)
-        out = np.empty(t.shape[:-1] + (4, 4))
-        ok = np.empty(t.shape[:-1] + (4,), dtype=bool)
-        for reach, sgn in ((0, 1.0), (1, -1.0)):
-            r = sgn * rho
-            yaw = bearing + np.arctan2(lf, r)
-            rw = r - tl * np.cos(psi_t)
-            cos3 = (rw * rw + zw * zw - a * a - b * b) / (2 * a * b)
-            valid = (rho2 >= 0) & (np.abs(cos3) <= 1 + 1e-12)
-            q3m = np.arccos(np.clip(cos3, -1.0, 1.0))
-            for elbow, q3 in ((0, -q3m), (1, q3m)):
-                psi_a = np.arctan2(zw, rw) - np.arctan2(b * np.sin(q3), a + b * np.cos(q3))
-                k = 2 * reach + elbow
-                out[..., k, 0] = yaw - self.yaw_offset
-                out[..., k, 1] = psi_a - self.pitch_offset
-                out[..., k, 2] = q3
-                out[..., k, 3] = psi_t - psi_a - q3
-                ok[..., k] = valid
-        lo, hi = self.limits[:, 0], self.limits[:, 1]
-        wrapped = lo + np.mod(out - lo, TWO_PI)
-        # a representative inside [lo, hi] exists iff wrapped <= hi (tolerance for limits hit exactly)
-        near_hi = np.abs(wrapped - TWO_PI - lo) < 1e-9
-        wrapped = np.where(near_hi, lo, wrapped)
-        fits = wrapped <= hi + 1e-9
-        q = np.where(fits, wrapped, out)
-        q = np.where(ok[..., None], q, np.nan)
-        in_limits = ok & np.all(fits, axis=-1)
-        return q, ok, in_limits
+        zw = z - self.shoulder_height
+        zw -= tl * np.sin(psi_t)
+        tc_ = tl * np.cos(psi_t)
+        zz = zw * zw
+        aa, bb, ab2 = a * a, b * b, 2 * a * b
+        rho_ok = rho2 >= 0
+        # rows of the 14 distinct joint values: per reach q1, then (q2, q3, q4) per elbow
+        rows = np.empty((14, m))
+        unreachable = []
+        for reach in (0, 1):
+            r = rho if reach == 0 else -rho
+            base = 7 * reach
+            yaw = rows[base]
+            np.arctan2(lf, r, out=yaw)
+            yaw += bearing
+            rw = r - tc_
+            cos3 = rw * rw
+            cos3 += zz
+            cos3 -= aa
+            cos3 -= bb
+            cos3 /= ab2
+            valid = np.abs(cos3) <= 1 + 1e-12
+            valid &= rho_ok
+            ok[:, 2 * reach] = valid
+            ok[:, 2 * reach + 1] = valid
+            if not valid.all():
+                unreachable.append((reach, ~valid))
+            q3m = np.arccos(np.clip(cos3, -1.0, 1.0, out=cos3), out=cos3)
+            yaw -= self.yaw_offset
+            at = np.arctan2(b * np.sin(q3m), a + b * np.cos(q3m))
+            base_ang = np.arctan2(zw, rw)
+            for elbow in (0, 1):
+                # elbow 0: q3 = -q3m, psi_a = base_ang - atan2(-S, C) = base_ang + at
+                psi_a = base_ang + at if elbow == 0 else base_ang - at
+                k = base + 1 + 3 * elbow
+                np.subtract(psi_a, self.pitch_offset, out=rows[k])
+                if elbow == 0:
+                    np.negative(q3m, out=rows[k + 1])
+                else:
+                    rows[k + 1] = q3m
+                d = np.subtract(psi_t, psi_a, out=rows[k + 2])
+                d -= rows[k + 1]
+        # wrap each joint into [lo, lo + 2 pi) as lo + np.mod(v - lo, 2 pi) (np.mod is
+        # fmod plus 2 pi where the remainder is negative, -0.0 -> +0.0), then back to the
+        # raw value where no representative fits the limits
+        lo = self._row_lo
+        hi = self._row_hi_tol
+        d = rows - lo
+        w = np.fmod(d, TWO_PI, out=d)
+        w += TWO_PI * (w < 0)
+        w += lo
+        # a value within 1e-9 below lo + 2 pi means lo (the limit hit exactly)
+        close = np.abs(w - TWO_PI - lo) < 1e-9 if (w > lo + (TWO_PI - 1e-8)).any() else None
+        if close is not None:
+            np.copyto(w, np.broadcast_to(lo, w.shape), where=close)
+        # (rows are finite for every existing branch: the inputs are finite)
+        outside = w > hi
+        np.copyto(w, rows, where=outside)
+        # rows -> (m, branch, joint): one transposing copy
+        o = out.reshape(m, 16)
+        o[:] = w[_ROW_OF_OUT].T
+        for reach, bad in unreachable:  # NaN for every joint of a branch that does not exist
+            o[bad, 8 * reach:8 * reach + 8] = np.nan
+        np.logical_not(outside[_ROW_OF_OUT].reshape(4, 4, m).any(axis=1).T, out=inl)
+        inl &= ok
 
     def _branches_one(self, x: float, y: float, z: float, phi: float) -> list[tuple[float, ...] | None]:
         """Scalar :meth:`ik_all` without limit handling: four raw branches or None."""
@@ -408,29 +486,26 @@ class WritingArm:
     ) -> tuple[float, float, float, float] | None:
         """:meth:`ik` for plain floats, without input checks: a tuple, or None if impossible.
 
-        The microsecond path for control loops and benchmarks (no numpy on the way).
+        The microsecond path for control loops and benchmarks (no numpy on the way). It runs
+        a function generated for this geometry (constants folded, branches computed lazily:
+        without ``current`` it stops at the first in-limit branch), installed on the
+        instance on first use so that later calls reach it directly.
         """
-        best, best_cost = None, math.inf
-        for qb in self._branches_one(x, y, z, phi):
-            if qb is None:
-                continue
-            qw = []
-            for qi, (lo, hi) in zip(qb, self._lim):  # type: ignore[attr-defined]
-                w = lo + (qi - lo) % TWO_PI
-                if w > hi + 1e-9:
-                    if w - TWO_PI - lo > -1e-9:
-                        w = lo
-                    else:
-                        break
-                qw.append(w)
-            else:
-                if current is None:
-                    return tuple(qw)  # type: ignore[return-value]
-                cost = (abs(qw[0] - current[0]) + abs(qw[1] - current[1])
-                        + abs(qw[2] - current[2]) + abs(qw[3] - current[3]))
-                if cost < best_cost:
-                    best, best_cost = qw, cost
-        return None if best is None else tuple(best)  # type: ignore[return-value]
+        fn = self.__dict__.get("_ik_fast_fn")
+        if fn is None:
+            fn = _ik_fast_function(self)
+            object.__setattr__(self, "_ik_fast_fn", fn)
+            object.__setattr__(self, "ik_fast", fn)
+        return fn(x, y, z, phi, current)
+
+    def __getstate__(self) -> dict:
+        # generated functions do not pickle: drop them, they are rebuilt on demand
+        state = {k: v for k, v in self.__dict__.items() if k not in ("ik_fast", "_ik_fast_fn")}
+        state["_kernels"] = {}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
 
     def ik(
         self,
@@ -495,3 +570,83 @@ class WritingArm:
             f"{np.degrees(self.limits).round(1).tolist()} deg",
             target=[x, y, z, phi],
         )
+
+
+def _ik_fast_function(arm: WritingArm) -> Callable[..., tuple[float, float, float, float] | None]:
+    """Generate :meth:`WritingArm.ik_fast` for one geometry.
+
+    The same floating-point operations as :meth:`WritingArm._branches_one` followed by the
+    limit wrapping of the original ``ik_fast``, in the same order (results are identical
+    bit for bit); constants are folded, ``q1`` is wrapped once per reach (it is shared by
+    both elbows), and each branch is computed only when the ones before it did not fit.
+    """
+    a, b, tl = float(arm.upper_arm), float(arm.forearm), float(arm.tool)
+    lf = float(arm.lateral_offset)
+    lim = arm._lim  # type: ignore[attr-defined]
+
+    def wrap(v: str, j: int, ind: str, fail: str) -> list[str]:
+        lo, hi = lim[j]
+        return [
+            f"{ind}w{j} = {lo!r} + ({v} - {lo!r}) % {TWO_PI!r}",
+            f"{ind}if w{j} > {hi + 1e-9!r}:",
+            f"{ind}    if w{j} - {TWO_PI!r} - {lo!r} > -1e-9:",
+            f"{ind}        w{j} = {lo!r}",
+            f"{ind}    else:",
+            f"{ind}        {fail}",
+        ]
+
+    def branch(sign: str, ind: str) -> list[str]:
+        lines = [
+            f"{ind}while True:",
+            f"{ind}    psi_a = base_ang - atan2({sign}ks, k_c)",
+            f"{ind}    q3 = {sign}ac",
+            *wrap(f"(psi_a - {float(arm.pitch_offset)!r})", 1, ind + "    ", "break"),
+            *wrap("q3", 2, ind + "    ", "break"),
+            *wrap("(psi_t - psi_a - q3)", 3, ind + "    ", "break"),
+            f"{ind}    if current is None:",
+            f"{ind}        return (w0, w1, w2, w3)",
+            f"{ind}    cost = abs(w0 - cur0) + abs(w1 - cur1) + abs(w2 - cur2) + abs(w3 - cur3)",
+            f"{ind}    if cost < best_cost:",
+            f"{ind}        best, best_cost = (w0, w1, w2, w3), cost",
+            f"{ind}    break",
+        ]
+        return lines
+
+    src = [
+        "def ik_fast(x, y, z, phi, current=None):",
+        f"    dx = x - {float(arm.base_xy[0])!r}",
+        f"    dy = y - {float(arm.base_xy[1])!r}",
+        f"    rho2 = dx * dx + dy * dy - {lf * lf!r}",
+        "    if rho2 < 0:",
+        "        return None",
+        "    rho = sqrt(rho2)",
+        f"    psi_t = phi + {float(arm.pitch_offset)!r}",
+        "    bearing = atan2(dy, dx)",
+        "    ct, st = cos(psi_t), sin(psi_t)",
+        f"    zw = z - {float(arm.shoulder_height)!r} - {tl!r} * st",
+        f"    base2 = zw * zw - {a * a!r} - {b * b!r}",
+        "    best, best_cost = None, inf",
+        "    if current is not None:",
+        "        cur0, cur1, cur2, cur3 = current[0], current[1], current[2], current[3]",
+        "    for r in (rho, -rho):",
+        f"        rw = r - {tl!r} * ct",
+        f"        c3 = (rw * rw + base2) / {2 * a * b!r}",
+        "        if c3 > 1.0 or c3 < -1.0:",
+        "            if abs(c3) > 1 + 1e-12:",
+        "                continue",
+        "            c3 = max(-1.0, min(1.0, c3))",
+        *wrap(f"(bearing + atan2({lf!r}, r) - {float(arm.yaw_offset)!r})", 0, "        ",
+              "continue"),
+        "        s3 = sqrt(1.0 - c3 * c3)",
+        "        base_ang = atan2(zw, rw)",
+        f"        k_c = {a!r} + {b!r} * c3",
+        f"        ks = {b!r} * s3",
+        "        ac = acos(c3)",
+        *branch("-", "        "),
+        *branch("", "        "),
+        "    return best",
+    ]
+    ns: dict[str, object] = {"sqrt": math.sqrt, "atan2": math.atan2, "cos": math.cos,
+                             "sin": math.sin, "acos": math.acos, "inf": math.inf}
+    exec(compile("\n".join(src) + "\n", f"<ik_fast {arm.name}>", "exec"), ns)  # noqa: S102
+    return ns["ik_fast"]  # type: ignore[return-value]
