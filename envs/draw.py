@@ -16,7 +16,7 @@ import numpy as np
 from kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
 from kinematics.localization import HoleMap
 
-__all__ = ["Canvas", "draw_wall", "draw_climber", "ARM_COLOURS"]
+__all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb", "ARM_COLOURS"]
 
 Colour = tuple[int, int, int]
 #: One colour per climber arm (RGB), in label order.
@@ -133,3 +133,75 @@ def draw_climber(canvas: Canvas, pose: object, q: object, geom: ClimberGeometry,
     canvas.circle(pose[:2], 2.2, tone((60, 60, 60)))
     head = pose[:2] + 3.5 * np.array([np.cos(pose[2]), np.sin(pose[2])])
     canvas.line(pose[:2], head, tone((250, 250, 250)), 0.35)
+
+
+_SERIES: tuple[Colour, ...] = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (255, 127, 14), (148, 103, 189),
+                               (140, 86, 75))
+
+
+def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
+               ylabel: str, size: tuple[int, int] = (720, 420), log_x: bool = False,
+               ylim: tuple[float, float] | None = None) -> np.ndarray:
+    """A small line chart (RGB array) of named ``(x, y)`` series, drawn with OpenCV.
+
+    Enough for the project's study plots without a plotting dependency: axes with ticks,
+    one colour per series with markers, a legend, a title and axis labels.
+    """
+    w, h = size
+    img = np.empty((h, w, 3), np.uint8)
+    img[...] = (255, 255, 255)
+    left, right, top, bottom = 70, 20, 40, 55
+    xs = np.concatenate([np.asarray(s[0], float) for s in series.values()])
+    ys = np.concatenate([np.asarray(s[1], float) for s in series.values()])
+    ys = ys[np.isfinite(ys)]
+    fx = np.log10 if log_x else (lambda v: np.asarray(v, float))
+    x0, x1 = float(np.min(fx(xs))), float(np.max(fx(xs)))
+    if x1 == x0:
+        x0, x1 = x0 - 1, x1 + 1
+    y0, y1 = ylim if ylim else (min(0.0, float(ys.min()) if len(ys) else 0.0), float(ys.max()) if len(ys) else 1.0)
+    if y1 == y0:
+        y1 = y0 + 1
+    pad = 0.05 * (x1 - x0)
+    x0, x1 = x0 - pad, x1 + pad
+
+    def to_px(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        u = left + (fx(x) - x0) / (x1 - x0) * (w - left - right)
+        v = h - bottom - (np.asarray(y, float) - y0) / (y1 - y0) * (h - top - bottom)
+        return np.stack([u, v], -1).round().astype(np.int32)
+
+    cv2.rectangle(img, (left, top), (w - right, h - bottom), (60, 60, 60), 1)
+    for k in range(6):
+        yv = y0 + k * (y1 - y0) / 5
+        v = int(round(h - bottom - k * (h - top - bottom) / 5))
+        cv2.line(img, (left, v), (w - right, v), (225, 225, 225), 1)
+        cv2.putText(img, f"{yv:.3g}", (5, v + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1, cv2.LINE_AA)
+    for xv in sorted(set(np.round(xs, 6).tolist())):
+        u = int(to_px(np.array([xv]), np.array([y0]))[0, 0])
+        cv2.line(img, (u, h - bottom), (u, h - bottom + 5), (60, 60, 60), 1)
+        cv2.putText(img, f"{xv:g}", (u - 12, h - bottom + 20), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1,
+                    cv2.LINE_AA)
+    for i, (name, (x, y)) in enumerate(series.items()):
+        col = _SERIES[i % len(_SERIES)]
+        y_arr = np.asarray(y, float)
+        ok = np.isfinite(y_arr)
+        pts = to_px(np.asarray(x, float)[ok], y_arr[ok])
+        if len(pts) > 1:
+            cv2.polylines(img, [pts.reshape(-1, 1, 2)], False, col, 2, cv2.LINE_AA)
+        for p in pts:
+            cv2.circle(img, (int(p[0]), int(p[1])), 4, col, -1, cv2.LINE_AA)
+        ly = top + 16 + 18 * i
+        cv2.line(img, (left + 10, ly - 4), (left + 30, ly - 4), col, 2, cv2.LINE_AA)
+        cv2.putText(img, name, (left + 36, ly), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (40, 40, 40), 1, cv2.LINE_AA)
+    cv2.putText(img, title, (left, 25), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (20, 20, 20), 1, cv2.LINE_AA)
+    cv2.putText(img, xlabel, (w // 2 - 60, h - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (40, 40, 40), 1, cv2.LINE_AA)
+    cv2.putText(img, ylabel, (5, top - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (40, 40, 40), 1, cv2.LINE_AA)
+    return img
+
+
+def save_rgb(img: np.ndarray, path: str | Path) -> Path:
+    """Write an RGB array as PNG (creating folders)."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if not cv2.imwrite(str(out), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
+        raise OSError(f"could not write image {out}")
+    return out

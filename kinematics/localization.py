@@ -8,6 +8,8 @@ missing holes, reproducibly from a seed.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,9 +17,14 @@ import numpy as np
 
 import configs as _configs
 
-from .errors import InvalidInputError, as_array
+from .climber import ClimberGeometry, hand_positions, inverse_program
+from .errors import InvalidInputError, KinematicsError, as_array
 
-__all__ = ["HoleMap", "WALL_SCHEMA"]
+__all__ = [
+    "HoleMap", "WALL_SCHEMA", "NoiseModel", "TriangleIndex", "Localizer", "Fix", "Candidate",
+    "LocalizationError", "NoFixError", "AmbiguousFixError", "BayesLocalizer", "seed_adjacent_search",
+    "chi2_3_cdf", "chi2_3_quantile", "Grip", "GripSimulator", "sensor_study",
+]
 
 WALL_SCHEMA: dict[str, _configs.Spec] = {
     "name": _configs.Text(default="wall"),
@@ -73,6 +80,25 @@ class HoleMap:
         """Position (cm) of hole ``(col, row)``."""
         return self.xy[self.index(hole_id)].copy()
 
+    @property
+    def spacing(self) -> float:
+        """Median nearest-neighbour distance (cm); the cell size of the spatial hash."""
+        cached = self.__dict__.get("_spacing")
+        if cached is None:
+            grid = _SpatialHash(self.xy, cell=max(1e-6, float(np.ptp(self.xy, axis=0).max()) / 64 or 1.0))
+            d = [grid.nearest_other(i) for i in range(min(len(self), 400))]
+            cached = float(np.median(d)) if len(self) > 1 else 1.0
+            object.__setattr__(self, "_spacing", cached)
+        return cached
+
+    def within(self, point: object, radius: float) -> np.ndarray:
+        """Indices of the holes within ``radius`` cm of ``point`` (constant time on average)."""
+        grid = self.__dict__.get("_grid")
+        if grid is None:
+            grid = _SpatialHash(self.xy, cell=max(self.spacing, 1e-6))
+            object.__setattr__(self, "_grid", grid)
+        return grid.within(point, radius)
+
     @classmethod
     def from_config(cls, name_or_path: str | Path = "seed_4x4") -> HoleMap:
         """Load ``configs/walls/<name>.yaml`` or a YAML path; raises ``configs.ConfigError``."""
@@ -117,3 +143,1053 @@ class HoleMap:
         if not keep.any():
             keep[rng.integers(len(ids))] = True
         return cls(ids=ids[keep], xy=xy[keep], name=name or f"grid_{cols}x{rows}")
+
+
+class _SpatialHash:
+    """Points binned into square cells of a dict: neighbourhood queries in microseconds."""
+
+    def __init__(self, xy: np.ndarray, cell: float) -> None:
+        self.xy, self.cell = xy, float(cell)
+        self.pts = [tuple(p) for p in xy.tolist()]
+        cells: dict[tuple[int, int], list[int]] = {}
+        for i, (cx, cy) in enumerate(np.floor(xy / self.cell).astype(np.int64).tolist()):
+            cells.setdefault((cx, cy), []).append(i)
+        self.cells = cells
+
+    def within_list(self, px: float, py: float, radius: float) -> list[int]:
+        c = self.cell
+        x0, x1 = math.floor((px - radius) / c), math.floor((px + radius) / c)
+        y0, y1 = math.floor((py - radius) / c), math.floor((py + radius) / c)
+        r2 = radius * radius
+        out = []
+        get, pts = self.cells.get, self.pts
+        for cx in range(x0, x1 + 1):
+            for cy in range(y0, y1 + 1):
+                for i in get((cx, cy), ()):
+                    hx, hy = pts[i]
+                    if (hx - px) ** 2 + (hy - py) ** 2 <= r2:
+                        out.append(i)
+        return out
+
+    def within(self, point: object, radius: float) -> np.ndarray:
+        return np.array(self.within_list(float(point[0]), float(point[1]), radius),  # type: ignore[index]
+                        dtype=np.int64)
+
+    def nearest_other(self, i: int) -> float:
+        r = self.cell
+        while True:
+            idx = [j for j in self.within_list(*self.pts[i], r) if j != i]
+            if idx:
+                return float(np.min(np.hypot(*(self.xy[idx] - self.xy[i]).T)))
+            r *= 2
+
+
+# ============================================================================ localisation
+class LocalizationError(KinematicsError):
+    """Base class of localisation failures."""
+
+
+class NoFixError(LocalizationError):
+    """No hole triple explains the measured hands. ``best`` is the closest candidate (or None)."""
+
+    def __init__(self, message: str, best: Candidate | None = None) -> None:
+        super().__init__(message)
+        self.best = best
+
+
+class AmbiguousFixError(LocalizationError):
+    """Several hole triples pass the gate. ``candidates`` lists them, most likely first, each
+    with its ``likelihood`` (probability among them); ``count`` says how many there are.
+    """
+
+    def __init__(self, message: str, candidates: Sequence[Candidate] | None = None, count: int | None = None,
+                 build: Callable[[], list[Candidate]] | None = None) -> None:
+        super().__init__(message)
+        self._candidates = None if candidates is None else tuple(candidates)
+        self._build = build
+        self.count = len(self._candidates) if count is None and self._candidates is not None else count
+
+    @property
+    def candidates(self) -> tuple[Candidate, ...]:
+        if self._candidates is None:
+            self._candidates = tuple(self._build()) if self._build else ()
+        return self._candidates
+
+
+def chi2_3_cdf(x: float) -> float:
+    """CDF of the chi-square distribution with 3 degrees of freedom (closed form)."""
+    if x <= 0:
+        return 0.0
+    return math.erf(math.sqrt(x / 2)) - math.sqrt(2 * x / math.pi) * math.exp(-x / 2)
+
+
+def chi2_3_quantile(p: float) -> float:
+    """Inverse of :func:`chi2_3_cdf` (bisection, 1e-12 relative)."""
+    if not 0.0 < p < 1.0:
+        raise InvalidInputError(f"probability {p!r}; expected 0 < p < 1")
+    lo, hi = 0.0, 200.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if chi2_3_cdf(mid) < p:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """What the measurements may get wrong; it sets the acceptance gate of a fix.
+
+    Attributes:
+        sigma_angle: 1-sigma encoder noise of every joint (rad). Seed 000 asks for +-0.5 deg.
+        sigma_map: 1-sigma error of each mapped hole coordinate (cm).
+        p_gate: probability that the *true* holes are rejected (the chi-square tail with
+            3 degrees of freedom: 6 residual coordinates minus the 3 fitted pose values).
+        tolerance: if set (cm), the seed's way instead: accept when every hand-to-hand
+            distance matches the holes' within ``tolerance``, no statistics.
+    """
+
+    sigma_angle: float = math.radians(0.5)
+    sigma_map: float = 0.05
+    p_gate: float = 1e-4
+    tolerance: float | None = None
+
+    def __post_init__(self) -> None:
+        for key in ("sigma_angle", "sigma_map"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"{key}={v!r}; expected a finite value >= 0")
+        if self.sigma_angle == 0 and self.sigma_map == 0 and self.tolerance is None:
+            raise InvalidInputError("sigma_angle and sigma_map are both 0; give a noise or a tolerance")
+        if not 0 < self.p_gate < 1:
+            raise InvalidInputError(f"p_gate={self.p_gate!r}; expected 0 < p_gate < 1")
+        if self.tolerance is not None and not (math.isfinite(self.tolerance) and self.tolerance > 0):
+            raise InvalidInputError(f"tolerance={self.tolerance!r}; expected a length > 0 cm")
+        object.__setattr__(self, "_limit", chi2_3_quantile(1.0 - self.p_gate))
+
+    @classmethod
+    def from_degrees(cls, sigma_deg: float, **kw: float) -> NoiseModel:
+        return cls(sigma_angle=math.radians(sigma_deg), **kw)
+
+    @property
+    def chi2_limit(self) -> float:
+        """Gate on the fit's chi-square: ``P(chi2_3 > limit) = p_gate``."""
+        return self._limit  # type: ignore[attr-defined]
+
+    def hand_covariances(self, q: np.ndarray, geom: ClimberGeometry) -> np.ndarray:
+        """Body-frame covariance of each hand, ``(3, 2, 2)`` cm^2 (joint noise + map error)."""
+        s, e = q[:, 0], q[:, 1]
+        lower = s - e + math.pi
+        d_lower = geom.l2[:, None] * np.stack([-np.sin(lower), np.cos(lower)], -1)
+        d_s = geom.l1[:, None] * np.stack([-np.sin(s), np.cos(s)], -1) + d_lower
+        jac = np.stack([d_s, -d_lower], axis=-1)  # (3, 2, 2): d hand / d (s, e)
+        cov = self.sigma_angle ** 2 * jac @ np.swapaxes(jac, -1, -2)
+        return cov + self.sigma_map ** 2 * np.eye(2)
+
+    def tolerance_for(self, link: float = 10.0) -> float:
+        """A fixed tolerance (cm) equivalent to this noise for links of ``link`` cm (for the seed mode).
+
+        The 99.99 % bound on a hand-to-hand distance error for stretched-ish arms.
+        """
+        sigma_hand = math.sqrt(5.0) * link * self.sigma_angle  # two joints, lever arms ~2l and l
+        sigma_d = math.sqrt(2.0) * math.hypot(sigma_hand, self.sigma_map)
+        return math.sqrt(self.chi2_limit) * sigma_d
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One hole triple with the rigid fit of the hands onto it.
+
+    ``holes``: map rows of the holes of arms 1, 2, 3; ``ids``: their ``(col, row)``;
+    ``pose``: body ``(x, y, heading)`` (cm, cm, rad); ``chi2``: fit statistic (3 dof);
+    ``residual_cm``: distance of each hand from its hole after the fit;
+    ``likelihood``: probability among the candidates that passed the gate (equal priors).
+    """
+
+    holes: tuple[int, int, int]
+    ids: tuple[tuple[int, int], tuple[int, int], tuple[int, int]]
+    pose: np.ndarray
+    chi2: float
+    residual_cm: np.ndarray
+    likelihood: float = 1.0
+
+    def as_dict(self) -> dict[str, object]:
+        return {"ids": [list(i) for i in self.ids], "centre_cm": [round(float(v), 4) for v in self.pose[:2]],
+                "heading_deg": round(math.degrees(float(self.pose[2])), 4), "chi2": round(self.chi2, 4),
+                "residual_cm": [round(float(v), 4) for v in self.residual_cm],
+                "likelihood": round(self.likelihood, 6)}
+
+
+class Fix:
+    """A unique localisation: the held holes, the body pose and how sure we are.
+
+    ``best`` is the accepted :class:`Candidate`; ``covariance`` the 3x3 covariance of
+    ``pose`` (cm^2, cm rad, rad^2) propagated from the noise model (computed on first use);
+    ``runner_up`` the next best candidate of the search (None if there was none);
+    ``n_candidates`` how many triples of matching shape were examined.
+    """
+
+    __slots__ = ("best", "runner_up", "n_candidates", "_h", "_cov", "_covariance")
+
+    def __init__(self, best: Candidate, runner_up: Candidate | None, n_candidates: int,
+                 hands: tuple[list[float], list[float]] | None = None,
+                 hand_cov: Sequence[tuple[float, float, float]] | None = None,
+                 covariance: np.ndarray | None = None) -> None:
+        self.best, self.runner_up, self.n_candidates = best, runner_up, n_candidates
+        self._h, self._cov, self._covariance = hands, hand_cov, covariance
+
+    @property
+    def covariance(self) -> np.ndarray:
+        if self._covariance is None:
+            if self._h is None:
+                self._covariance = np.full((3, 3), np.nan)
+            else:
+                hands = np.array(self._h, dtype=float).T
+                cov = np.array([[[a, b], [b, c]] for a, b, c in self._cov])  # type: ignore[union-attr]
+                self._covariance = _pose_covariance(self.best.pose, hands, cov)
+        return self._covariance
+
+    @property
+    def holes(self) -> tuple[int, int, int]:
+        return self.best.holes
+
+    @property
+    def ids(self) -> tuple[tuple[int, int], tuple[int, int], tuple[int, int]]:
+        return self.best.ids
+
+    @property
+    def pose(self) -> np.ndarray:
+        return self.best.pose
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self.best.pose[:2]
+
+    @property
+    def heading(self) -> float:
+        return float(self.best.pose[2])
+
+    def __repr__(self) -> str:
+        x, y, th = (float(v) for v in self.pose)
+        return (f"Fix(ids={self.ids}, centre=({x:.4f}, {y:.4f}) cm, heading={math.degrees(th):.3f} deg, "
+                f"chi2={self.best.chi2:.3g})")
+
+    def as_dict(self) -> dict[str, object]:
+        std = np.sqrt(np.diag(self.covariance))
+        return {**self.best.as_dict(), "centre_std_cm": [round(float(v), 4) for v in std[:2]],
+                "heading_std_deg": round(math.degrees(float(std[2])), 4),
+                "runner_up": None if self.runner_up is None else self.runner_up.as_dict(),
+                "candidates_examined": self.n_candidates}
+
+
+_GN_STEPS = 2
+
+
+def _fit(p: np.ndarray, h: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted rigid 2-D fit of body hands ``h (3, 2)`` onto holes ``p (K, 3, 2)``, vectorised.
+
+    Kabsch gives the start; two Gauss-Newton steps then minimise the chi-square
+    ``sum_i b_i^T W_i b_i`` with ``b_i = R^T (p_i - t) - h_i`` (hand residual in the body
+    frame, where the hand covariances ``W_i^-1`` live), so that the statistic follows a
+    chi-square law with 3 degrees of freedom even for very anisotropic hand noise.
+    Returns ``pose (K, 3)``, ``chi2 (K,)`` and the residual distances ``(K, 3)``.
+    """
+    k = len(p)
+    hm = h.mean(axis=0)
+    pm = p.mean(axis=1)
+    hc = h - hm
+    pc = p - pm[:, None, :]
+    dot = (pc[..., 0] * hc[None, :, 0] + pc[..., 1] * hc[None, :, 1]).sum(axis=1)
+    cross = (hc[None, :, 0] * pc[..., 1] - hc[None, :, 1] * pc[..., 0]).sum(axis=1)
+    th = np.arctan2(cross, dot)
+    c, s = np.cos(th), np.sin(th)
+    tx = pm[:, 0] - (c * hm[0] - s * hm[1])
+    ty = pm[:, 1] - (s * hm[0] + c * hm[1])
+    w00, w01, w11 = weights[:, 0, 0], weights[:, 0, 1], weights[:, 1, 1]
+    for _ in range(_GN_STEPS + 1):
+        dx, dy = p[..., 0] - tx[:, None], p[..., 1] - ty[:, None]
+        bx = c[:, None] * dx + s[:, None] * dy - h[None, :, 0]
+        by = -s[:, None] * dx + c[:, None] * dy - h[None, :, 1]
+        if _ == _GN_STEPS:
+            break
+        # Jacobian of b_i w.r.t. (tx, ty, th): columns -R^T e_x, -R^T e_y, dR^T/dth (p_i - t)
+        jx = np.stack([-c, s], -1)[:, None, :].repeat(3, 1)    # (K, 3, 2) d b / d tx = -R^T e_x
+        jy = np.stack([-s, -c], -1)[:, None, :].repeat(3, 1)   # d b / d ty = -R^T e_y
+        jt = np.stack([-s[:, None] * dx + c[:, None] * dy, -c[:, None] * dx - s[:, None] * dy], -1)
+        cols = (jx, jy, jt)
+        wb = np.stack([w00 * bx + w01 * by, w01 * bx + w11 * by], -1)
+        g = np.stack([(cj * wb).sum(axis=(1, 2)) for cj in cols], -1)
+        hess = np.empty((k, 3, 3))
+        for i, ci in enumerate(cols):
+            wci = np.stack([w00 * ci[..., 0] + w01 * ci[..., 1], w01 * ci[..., 0] + w11 * ci[..., 1]], -1)
+            for j in range(i, 3):
+                hess[:, i, j] = hess[:, j, i] = (wci * cols[j]).sum(axis=(1, 2))
+        step = np.linalg.solve(hess, -g[..., None])[..., 0]
+        tx, ty, th = tx + step[:, 0], ty + step[:, 1], th + step[:, 2]
+        c, s = np.cos(th), np.sin(th)
+    chi2 = (w00 * bx * bx + 2 * w01 * bx * by + w11 * by * by).sum(axis=1)
+    th = np.mod(th + np.pi, 2 * np.pi) - np.pi
+    return np.stack([tx, ty, th], -1), chi2, np.hypot(bx, by)
+
+
+def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: Sequence[float],
+             w: Sequence[tuple[float, float, float]]) -> tuple[float, float, float, float, list[float]]:
+    """:func:`_fit` for one triple in plain Python: ``(x, y, heading, chi2, residuals)``."""
+    hmx, hmy = (hx[0] + hx[1] + hx[2]) / 3, (hy[0] + hy[1] + hy[2]) / 3
+    pmx, pmy = (px[0] + px[1] + px[2]) / 3, (py[0] + py[1] + py[2]) / 3
+    dot = cross = 0.0
+    for i in range(3):
+        ax, ay, bx, by = hx[i] - hmx, hy[i] - hmy, px[i] - pmx, py[i] - pmy
+        dot += ax * bx + ay * by
+        cross += ax * by - ay * bx
+    th = math.atan2(cross, dot)
+    c, s = math.cos(th), math.sin(th)
+    tx, ty = pmx - (c * hmx - s * hmy), pmy - (s * hmx + c * hmy)
+    for it in range(_GN_STEPS + 1):
+        chi2 = 0.0
+        res = []
+        h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
+        for i in range(3):
+            dx, dy = px[i] - tx, py[i] - ty
+            bx = c * dx + s * dy - hx[i]
+            by = -s * dx + c * dy - hy[i]
+            w00, w01, w11 = w[i]
+            wbx, wby = w00 * bx + w01 * by, w01 * bx + w11 * by
+            chi2 += bx * wbx + by * wby
+            res.append(math.sqrt(bx * bx + by * by))
+            if it == _GN_STEPS:
+                continue
+            # columns: d b/d tx = (-c, s), d b/d ty = (-s, -c), d b/d th = (-s dx + c dy, -c dx - s dy)
+            ax_, ay_ = -c, s
+            bx_, by_ = -s, -c
+            cx_, cy_ = -s * dx + c * dy, -c * dx - s * dy
+            wa = (w00 * ax_ + w01 * ay_, w01 * ax_ + w11 * ay_)
+            wb = (w00 * bx_ + w01 * by_, w01 * bx_ + w11 * by_)
+            wc = (w00 * cx_ + w01 * cy_, w01 * cx_ + w11 * cy_)
+            h00 += wa[0] * ax_ + wa[1] * ay_
+            h01 += wa[0] * bx_ + wa[1] * by_
+            h02 += wa[0] * cx_ + wa[1] * cy_
+            h11 += wb[0] * bx_ + wb[1] * by_
+            h12 += wb[0] * cx_ + wb[1] * cy_
+            h22 += wc[0] * cx_ + wc[1] * cy_
+            g0 += ax_ * wbx + ay_ * wby
+            g1 += bx_ * wbx + by_ * wby
+            g2 += cx_ * wbx + cy_ * wby
+        if it == _GN_STEPS:
+            break
+        # solve H d = -g (3x3 symmetric) by Cramer's rule
+        det = (h00 * (h11 * h22 - h12 * h12) - h01 * (h01 * h22 - h12 * h02) + h02 * (h01 * h12 - h11 * h02))
+        if det == 0:
+            break
+        r0, r1, r2 = -g0, -g1, -g2
+        d0 = (r0 * (h11 * h22 - h12 * h12) - h01 * (r1 * h22 - h12 * r2) + h02 * (r1 * h12 - h11 * r2)) / det
+        d1 = (h00 * (r1 * h22 - h12 * r2) - r0 * (h01 * h22 - h12 * h02) + h02 * (h01 * r2 - r1 * h02)) / det
+        d2 = (h00 * (h11 * r2 - r1 * h12) - h01 * (h01 * r2 - r1 * h02) + r0 * (h01 * h12 - h11 * h02)) / det
+        tx, ty, th = tx + d0, ty + d1, th + d2
+        c, s = math.cos(th), math.sin(th)
+    return tx, ty, math.remainder(th, 2 * math.pi), chi2, res
+
+
+def _pose_covariance(pose: np.ndarray, h: np.ndarray, cov_body: np.ndarray) -> np.ndarray:
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    rot = np.array([[c, -s], [s, c]])
+    info = np.zeros((3, 3))
+    for i in range(3):
+        jac = np.array([[1.0, 0.0, -s * h[i, 0] - c * h[i, 1]], [0.0, 1.0, c * h[i, 0] - s * h[i, 1]]])
+        w = np.linalg.inv(rot @ cov_body[i] @ rot.T)
+        info += jac.T @ w @ jac
+    return np.linalg.inv(info)
+
+
+class TriangleIndex:
+    """Every hole triangle the climber can hold, keyed by its sides in counter-clockwise order.
+
+    A triangle is *holdable* when its three holes fit in a disc of the robot's largest
+    reach (``l1 + l2`` plus the shoulder offset): some body centre then has every hole
+    within reach. Each triangle is stored with its vertices counter-clockwise and under
+    its three cyclic rotations, keyed by the side lengths ``(|v0 v1|, |v1 v2|, |v2 v0|)``
+    quantised into ``cell`` cm: a query with the hands' sides in counter-clockwise arm order
+    finds, by binary search, exactly the triangles of the same orientation - a mirror image
+    has its sides in the other cyclic order and never matches. Built once per map and robot
+    (O(N) memory); a query touches only the few cells around the measured sides.
+    """
+
+    def __init__(self, holes: HoleMap, geom: ClimberGeometry, cell: float = 0.25) -> None:
+        self.holes, self.cell = holes, float(cell)
+        reach = float(np.max(geom.l1 + geom.l2 + np.linalg.norm(geom.shoulders, axis=1)))
+        self.reach = reach
+        tri = _holdable_triangles(holes.xy, reach)
+        xy = holes.xy
+        sides = np.stack([
+            np.linalg.norm(xy[tri[:, 0]] - xy[tri[:, 1]], axis=1),
+            np.linalg.norm(xy[tri[:, 1]] - xy[tri[:, 2]], axis=1),
+            np.linalg.norm(xy[tri[:, 2]] - xy[tri[:, 0]], axis=1),
+        ], -1)
+        self.triangles, self.sides = tri, sides
+        n = len(tri)
+        rot_sides = np.concatenate([sides, np.roll(sides, -1, axis=1), np.roll(sides, -2, axis=1)])
+        keys = self._keys(np.floor(rot_sides / self.cell).astype(np.int64))
+        order = np.argsort(keys, kind="stable")
+        self.keys = keys[order]
+        self.entry_tri = (order % n).astype(np.int64) if n else order
+        self.entry_rot = (order // n).astype(np.int8) if n else order.astype(np.int8)
+
+    @staticmethod
+    def _keys(cells: np.ndarray) -> np.ndarray:
+        cells = np.clip(cells, 0, (1 << 20) - 1)
+        return (cells[..., 0] << 40) | (cells[..., 1] << 20) | cells[..., 2]
+
+    def __len__(self) -> int:
+        return len(self.triangles)
+
+    def query(self, sides: Sequence[float], half_width: Sequence[float]) -> np.ndarray:
+        """Hole triples ``(K, 3)`` (in the query's vertex order) whose sides match within the widths."""
+        s = np.asarray(sides, dtype=np.float64)
+        w = np.asarray(half_width, dtype=np.float64)
+        lo = np.floor((s - w) / self.cell).astype(np.int64)
+        hi = np.floor((s + w) / self.cell).astype(np.int64)
+        r0, r1 = np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1)
+        r2 = np.arange(lo[2], hi[2] + 1)
+        first = self._keys(np.stack(np.meshgrid(r0, r1, [lo[2]], indexing="ij"), -1).reshape(-1, 3))
+        # cells along the last axis are contiguous keys: one range per (i0, i1)
+        a = np.searchsorted(self.keys, first, "left")
+        b = np.searchsorted(self.keys, first + len(r2), "left")
+        counts = b - a
+        total = int(counts.sum())
+        if total == 0:
+            return np.empty((0, 3), dtype=np.int64)
+        starts = np.repeat(a - np.cumsum(counts) + counts, counts) + np.arange(total)
+        tri = self.entry_tri[starts]
+        rot = self.entry_rot[starts].astype(np.int64)
+        got = self.sides[tri[:, None], (np.arange(3)[None, :] + rot[:, None]) % 3]
+        keep = np.all(np.abs(got - s) <= w, axis=1)
+        tri, rot = tri[keep], rot[keep]
+        verts = self.triangles[tri[:, None], (np.arange(3)[None, :] + rot[:, None]) % 3]
+        return verts
+
+
+def _holdable_triangles(xy: np.ndarray, reach: float) -> np.ndarray:
+    """All triples (counter-clockwise) whose minimum enclosing circle has radius <= reach."""
+    n = len(xy)
+    if n < 3:
+        return np.empty((0, 3), dtype=np.int64)
+    diam = 2.0 * reach
+    cells = np.floor(xy / diam).astype(np.int64)
+    shift = 1 << 31
+    key = (cells[:, 0] + shift // 2) * shift + (cells[:, 1] + shift // 2)
+    order = np.argsort(key, kind="stable")
+    skey = key[order]
+    pi_list, pj_list = [], []
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            q = key + dx * shift + dy
+            a = np.searchsorted(skey, q, "left")
+            b = np.searchsorted(skey, q, "right")
+            cnt = b - a
+            tot = int(cnt.sum())
+            if tot == 0:
+                continue
+            i = np.repeat(np.arange(n), cnt)
+            j = order[np.repeat(a - np.cumsum(cnt) + cnt, cnt) + np.arange(tot)]
+            m = (j > i) & (np.sum((xy[i] - xy[j]) ** 2, axis=1) <= diam * diam)
+            pi_list.append(i[m])
+            pj_list.append(j[m])
+    pi = np.concatenate(pi_list)
+    pj = np.concatenate(pj_list)
+    o = np.lexsort((pj, pi))
+    pi, pj = pi[o], pj[o]
+    pair_key = pi * n + pj
+    # for pair (i, j), every k in i's forward list after j: candidate (i, j, k); keep if (j, k) is a pair
+    seg_end = np.searchsorted(pi, pi, "right")
+    cnt = seg_end - np.arange(len(pi)) - 1
+    tot = int(cnt.sum())
+    if tot == 0:
+        return np.empty((0, 3), dtype=np.int64)
+    base = np.repeat(np.arange(len(pi)), cnt)
+    off = np.arange(tot) - np.repeat(np.cumsum(cnt) - cnt, cnt) + 1
+    ti, tj, tk = pi[base], pj[base], pj[base + off]
+    pos = np.searchsorted(pair_key, tj * n + tk)
+    pos = np.minimum(pos, len(pair_key) - 1)
+    ok = pair_key[pos] == tj * n + tk
+    ti, tj, tk = ti[ok], tj[ok], tk[ok]
+    a, b, c = xy[ti], xy[tj], xy[tk]
+    # minimum enclosing circle: half the longest side if the triangle is right/obtuse, else circumradius
+    ab2, bc2, ca2 = ((a - b) ** 2).sum(1), ((b - c) ** 2).sum(1), ((c - a) ** 2).sum(1)
+    longest2 = np.maximum(np.maximum(ab2, bc2), ca2)
+    obtuse = 2 * longest2 >= ab2 + bc2 + ca2
+    cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        circ = np.sqrt(ab2 * bc2 * ca2) / (2 * np.abs(cross))
+    radius = np.where(obtuse, 0.5 * np.sqrt(longest2), circ)
+    keep = radius <= reach + 1e-9
+    ti, tj, tk, cross = ti[keep], tj[keep], tk[keep], cross[keep]
+    cw = cross < 0
+    tj2 = np.where(cw, tk, tj)
+    tk2 = np.where(cw, tj, tk)
+    return np.stack([ti, tj2, tk2], -1).astype(np.int64)
+
+
+class Localizer:
+    """Localises the climber on one wall: global fixes, tracking, and lost starts.
+
+    Build once per (map, robot, noise); it owns the :class:`TriangleIndex`. Every method
+    takes the six measured joint angles ``q (3, 2)`` in radians (seed convention: shoulder
+    from the body x axis, elbow between the links).
+    """
+
+    def __init__(self, holes: HoleMap, geom: ClimberGeometry | None = None,
+                 noise: NoiseModel | None = None, index: TriangleIndex | None = None) -> None:
+        if len(holes) < 3:
+            raise InvalidInputError(f"map '{holes.name}' has {len(holes)} holes; a fix needs at least 3")
+        self.holes = holes
+        self.geom = geom or ClimberGeometry()
+        self.noise = noise or NoiseModel()
+        self.index = index or TriangleIndex(holes, self.geom)
+        holes.within(holes.xy[0], 0.0)  # build the spatial hash now, not during a fix
+        self._grid = holes.__dict__["_grid"]
+        g = self.geom
+        self._arms = [(float(g.l1[i]), float(g.l2[i]), float(g.shoulders[i, 0]), float(g.shoulders[i, 1]))
+                      for i in range(3)]
+        self._var_a, self._var_m = self.noise.sigma_angle ** 2, self.noise.sigma_map ** 2
+        self._limit = self.noise.chi2_limit
+        self._z = math.sqrt(self._limit)
+        self._xs, self._ys = holes.xy[:, 0].tolist(), holes.xy[:, 1].tolist()
+        self._ids = [(int(a), int(b)) for a, b in holes.ids.tolist()]
+
+    # -------------------------------------------------------------- measurement model
+    def _measure(self, q: object) -> tuple[list[float], list[float], list[tuple[float, float, float]],
+                                          list[tuple[float, float, float]]]:
+        """Hands (body frame), their covariances (a, b, c) and inverse covariances, plain floats."""
+        if isinstance(q, np.ndarray) and q.shape == (3, 2):
+            rows = q.tolist()
+        else:
+            qa = as_array("joint angles q", q, (3, 2))
+            if qa.shape != (3, 2):
+                raise InvalidInputError(f"joint angles q have shape {qa.shape}; expected (3, 2) - one grip")
+            rows = qa.tolist()
+        hx, hy, cov, w = [], [], [], []
+        va, vm = self._var_a, self._var_m
+        for (s, e), (l1, l2, ox, oy) in zip(rows, self._arms):
+            if not (math.isfinite(s) and math.isfinite(e)):
+                raise InvalidInputError(f"joint angles q={rows!r} hold NaN or infinity; expected radians")
+            cs, ss = math.cos(s), math.sin(s)
+            lo = s - e + math.pi
+            cl, sl = math.cos(lo), math.sin(lo)
+            hx.append(ox + l1 * cs + l2 * cl)
+            hy.append(oy + l1 * ss + l2 * sl)
+            dlx, dly = -l2 * sl, l2 * cl
+            dsx, dsy = -l1 * ss + dlx, l1 * cs + dly
+            a = va * (dsx * dsx + dlx * dlx) + vm
+            b = va * (dsx * dsy + dlx * dly)
+            c = va * (dsy * dsy + dly * dly) + vm
+            det = a * c - b * b
+            cov.append((a, b, c))
+            w.append((c / det, -b / det, a / det))
+        return hx, hy, cov, w
+
+    @staticmethod
+    def _cov_array(cov: Sequence[tuple[float, float, float]]) -> np.ndarray:
+        return np.array([[[a, b], [b, c]] for a, b, c in cov])
+
+    def _candidate(self, holes: Sequence[int], x: float, y: float, th: float, chi2: float,
+                   res: Sequence[float], lik: float = 1.0) -> Candidate:
+        ids = self._ids
+        return Candidate((int(holes[0]), int(holes[1]), int(holes[2])),
+                         (ids[holes[0]], ids[holes[1]], ids[holes[2]]),
+                         np.array([x, y, th]), float(chi2), np.array(res, dtype=float), float(lik))
+
+    def _evaluate(self, verts: list[tuple[int, int, int]], hx: list[float], hy: list[float],
+                  w: list[tuple[float, float, float]]) -> list[Candidate]:
+        """Fit a few triples (plain Python); best first."""
+        xs, ys = self._xs, self._ys
+        out = []
+        for v in verts:
+            x, y, th, chi2, res = _fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]],
+                                           hx, hy, w)
+            out.append(self._candidate(v, x, y, th, chi2, res))
+        out.sort(key=lambda c: c.chi2)
+        return out
+
+    def _passes(self, cand: Candidate, hx: list[float], hy: list[float]) -> bool:
+        tol = self.noise.tolerance
+        if tol is None:
+            return cand.chi2 <= self._limit
+        xs, ys = self._xs, self._ys
+        v = cand.holes
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            dp = math.hypot(xs[v[i]] - xs[v[j]], ys[v[i]] - ys[v[j]])
+            dh = math.hypot(hx[i] - hx[j], hy[i] - hy[j])
+            if abs(dp - dh) > tol:
+                return False
+        return True
+
+    def _decide(self, cands: list[Candidate], hx: list[float], hy: list[float],
+                cov: list[tuple[float, float, float]], what: str, n_examined: int | None = None) -> Fix:
+        passed = [c for c in cands if self._passes(c, hx, hy)]
+        n = len(cands) if n_examined is None else n_examined
+        if len(passed) == 1:
+            best = passed[0]
+            runner = next((c for c in cands if c is not best), None)
+            return Fix(best, runner, n, (hx, hy), cov)
+        if not passed:
+            best = cands[0] if cands else None
+            extra = (f"; best candidate {best.ids} has chi2 {best.chi2:.3g} (gate {self._limit:.3g}), "
+                     f"residual up to {max(best.residual_cm):.3g} cm" if best else "; no hole triple of matching shape")
+            raise NoFixError(f"no fix on map '{self.holes.name}' ({what}){extra}", best)
+        raise self._ambiguous(passed, what)
+
+    def _ambiguous(self, passed: list[Candidate], what: str) -> AmbiguousFixError:
+        if self.noise.tolerance is None:
+            lo = min(c.chi2 for c in passed)
+            wts = [math.exp(-0.5 * (c.chi2 - lo)) for c in passed]
+        else:
+            wts = [1.0] * len(passed)
+        tot = sum(wts)
+        passed = [Candidate(c.holes, c.ids, c.pose, c.chi2, c.residual_cm, wt / tot) for c, wt in zip(passed, wts)]
+        passed.sort(key=lambda c: -c.likelihood)
+        listing = ", ".join(f"{c.ids} (p={c.likelihood:.3g})" for c in passed[:5])
+        more = f" and {len(passed) - 5} more" if len(passed) > 5 else ""
+        return AmbiguousFixError(
+            f"{len(passed)} hole triples on map '{self.holes.name}' fit the hands ({what}): {listing}{more}", passed)
+
+    def _side_widths(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                     order: Sequence[int]) -> np.ndarray:
+        """Half-widths of the index query per side: the gate's z times the side's own sigma."""
+        if self.noise.tolerance is not None:
+            return np.full(3, self.noise.tolerance)
+        out = []
+        for k in range(3):
+            i, j = order[k], order[(k + 1) % 3]
+            dx, dy = hx[i] - hx[j], hy[i] - hy[j]
+            d = math.hypot(dx, dy) or 1.0
+            ux, uy = dx / d, dy / d
+            var = 0.0
+            for a, b, c in (cov[i], cov[j]):
+                var += a * ux * ux + 2 * b * ux * uy + c * uy * uy
+            out.append(1.05 * self._z * math.sqrt(var))
+        return np.array(out)
+
+    # -------------------------------------------------------------- public API
+    def search(self, q: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Every hole triple of the measured oriented shape, vectorised, best first.
+
+        Returns ``verts (K, 3)`` (map rows, arm order), ``pose (K, 3)``, ``chi2 (K,)``,
+        ``residual_cm (K, 3)``.
+        """
+        hx, hy, cov, w = self._measure(q)
+        return self._search(hx, hy, cov, w)
+
+    def _search(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                w: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        cross = (hx[1] - hx[0]) * (hy[2] - hy[0]) - (hy[1] - hy[0]) * (hx[2] - hx[0])
+        sides = [math.hypot(hx[i] - hx[(i + 1) % 3], hy[i] - hy[(i + 1) % 3]) for i in range(3)]
+        wmax = float(np.max(self._side_widths(hx, hy, cov, (0, 1, 2))))
+        slack = 2 * wmax * max(sides)  # |cross| this small: orientation within the noise
+        found = []
+        for order in ((0, 1, 2), (0, 2, 1)):
+            if (order == (0, 1, 2) and cross < -slack) or (order == (0, 2, 1) and cross > slack):
+                continue
+            qs = [math.hypot(hx[order[k]] - hx[order[(k + 1) % 3]], hy[order[k]] - hy[order[(k + 1) % 3]])
+                  for k in range(3)]
+            verts = self.index.query(qs, self._side_widths(hx, hy, cov, order))
+            if len(verts):
+                found.append(verts[:, np.argsort(order)])
+        if not found:
+            z = np.empty((0, 3))
+            return np.empty((0, 3), np.int64), z, np.empty(0), z
+        verts = np.concatenate(found)
+        if len(found) > 1:
+            verts = np.unique(verts, axis=0)
+        h = np.array([hx, hy]).T
+        pose, chi2, res = _fit(self.holes.xy[verts], h, np.array([[[a, b], [b, c]] for a, b, c in w]))
+        order = np.argsort(chi2, kind="stable")
+        return verts[order], pose[order], chi2[order], res[order]
+
+    def candidates(self, q: object) -> list[Candidate]:
+        """:meth:`search` as :class:`Candidate` objects (can be thousands on a big wall)."""
+        verts, pose, chi2, res = self.search(q)
+        return [self._candidate(v, *p, c, r) for v, p, c, r in zip(verts.tolist(), pose.tolist(), chi2.tolist(),
+                                                                   res.tolist())]
+
+    def localize(self, q: object) -> Fix:
+        """Global fix from one grip: which hole each arm holds and the body pose.
+
+        Raises:
+            NoFixError: no triple passes the gate (carries the best candidate).
+            AmbiguousFixError: several pass (carries them with their likelihoods).
+        """
+        hx, hy, cov, w = self._measure(q)
+        verts, pose, chi2, res = self._search(hx, hy, cov, w)
+        k = len(chi2)
+        if self.noise.tolerance is not None:
+            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(k)]
+            return self._decide(cands, hx, hy, cov, "global search", n_examined=k)
+        n_pass = int(np.searchsorted(chi2, self._limit, "right"))
+        if n_pass <= 1:
+            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(min(k, 2))]
+            return self._decide(cands, hx, hy, cov, "global search", n_examined=k)
+        lik = np.exp(-0.5 * (chi2[:n_pass] - chi2[0]))
+        lik /= lik.sum()
+
+        def build() -> list[Candidate]:
+            return [self._candidate(verts[i], *pose[i], chi2[i], res[i], lik[i]) for i in range(n_pass)]
+
+        ids = self._ids
+        listing = ", ".join(f"{tuple(ids[v] for v in verts[i])} (p={lik[i]:.3g})" for i in range(min(5, n_pass)))
+        more = f" and {n_pass - 5} more" if n_pass > 5 else ""
+        raise AmbiguousFixError(f"{n_pass} hole triples on map '{self.holes.name}' fit the hands (global search): "
+                                f"{listing}{more}", count=n_pass, build=build)
+
+    def predict_moved_hand(self, holes: Sequence[int], hx: list[float], hy: list[float],
+                           moved: int) -> tuple[float, float]:
+        """Wall position of hand ``moved`` (0..2) placed by the two kept hands on their holes."""
+        xs, ys = self._xs, self._ys
+        i, j = [k for k in range(3) if k != moved]
+        dpx, dpy = xs[holes[j]] - xs[holes[i]], ys[holes[j]] - ys[holes[i]]
+        dhx, dhy = hx[j] - hx[i], hy[j] - hy[i]
+        th = math.atan2(dpy, dpx) - math.atan2(dhy, dhx)
+        c, s = math.cos(th), math.sin(th)
+        rx, ry = hx[moved] - 0.5 * (hx[i] + hx[j]), hy[moved] - 0.5 * (hy[i] + hy[j])
+        return (0.5 * (xs[holes[i]] + xs[holes[j]]) + c * rx - s * ry,
+                0.5 * (ys[holes[i]] + ys[holes[j]]) + s * rx + c * ry)
+
+    def _track_candidates(self, holes: Sequence[int], hx: list[float], hy: list[float],
+                          cov: list[tuple[float, float, float]], w: list[tuple[float, float, float]],
+                          moved_arm: int | None) -> list[Candidate]:
+        if moved_arm is None:
+            return self._evaluate([tuple(holes)], hx, hy, w)  # type: ignore[list-item]
+        m = moved_arm - 1
+        px, py = self.predict_moved_hand(holes, hx, hy, m)
+        if self.noise.tolerance is not None:
+            radius = 3 * self.noise.tolerance
+        else:
+            a, b, c = cov[m]
+            lam = 0.5 * (a + c) + math.sqrt(0.25 * (a - c) ** 2 + b * b)
+            radius = 3 * self._z * math.sqrt(lam)
+        kept = {holes[k] for k in range(3) if k != m}
+        verts = []
+        for j in self._grid.within_list(px, py, radius):
+            if j not in kept:
+                v = list(holes)
+                v[m] = j
+                verts.append(tuple(v))
+        return self._evaluate(verts, hx, hy, w)  # type: ignore[arg-type]
+
+    def track(self, previous: Fix | Sequence[int], q: object, moved_arm: int | None) -> Fix:
+        """Fix after a known move, in constant time: arms other than ``moved_arm`` (1..3) still
+        hold their holes; the moved hand is looked for near where the kept hands put it.
+        ``moved_arm=None``: no hand moved (e.g. a body shift), only the pose is refitted.
+        """
+        holes = [int(v) for v in (previous.holes if isinstance(previous, Fix) else previous)]
+        if len(holes) != 3 or not all(0 <= v < len(self._xs) for v in holes):
+            raise InvalidInputError(f"previous holes {holes}; expected 3 map rows in 0..{len(self._xs) - 1}")
+        if moved_arm is not None and moved_arm not in (1, 2, 3):
+            raise InvalidInputError(f"moved_arm={moved_arm!r}; expected 1, 2, 3 or None")
+        hx, hy, cov, w = self._measure(q)
+        cands = self._track_candidates(holes, hx, hy, cov, w, moved_arm)
+        return self._decide(cands, hx, hy, cov, "tracking" if moved_arm is None else f"tracking arm {moved_arm}")
+
+
+class BayesLocalizer:
+    """Lost start: a discrete Bayes filter over hole-triple hypotheses, grip after grip.
+
+    The first grip seeds the hypotheses with every candidate that passes the gate (weights
+    ``exp(-chi2/2)``, equal priors); every later grip (naming the arm that moved, or None
+    for a body shift) propagates each hypothesis by a tracking step and multiplies in the
+    new fit's likelihood. :attr:`fix` is the best hypothesis once it holds at least
+    ``threshold`` of the probability. If every hypothesis dies, the grip starts over globally.
+    """
+
+    def __init__(self, localizer: Localizer, threshold: float = 0.999) -> None:
+        if not 0.5 <= threshold < 1:
+            raise InvalidInputError(f"threshold={threshold!r}; expected 0.5 <= threshold < 1")
+        self.loc, self.threshold = localizer, threshold
+        self.reset()
+
+    def reset(self) -> None:
+        self.hypotheses: dict[tuple[int, int, int], float] = {}
+        self._last: dict[tuple[int, int, int], Candidate] = {}
+        self.grips = 0
+        self.restarts = 0
+
+    def observe(self, q: object, moved_arm: int | None = None) -> Fix | None:
+        """Add one grip; returns the :class:`Fix` once localised, else None."""
+        if moved_arm is not None and moved_arm not in (1, 2, 3):
+            raise InvalidInputError(f"moved_arm={moved_arm!r}; expected 1, 2, 3 or None")
+        loc = self.loc
+        hx, hy, cov, w = loc._measure(q)
+        self.grips += 1
+        new: dict[tuple[int, int, int], float] = {}
+        last: dict[tuple[int, int, int], Candidate] = {}
+        for holes, weight in self.hypotheses.items():
+            for c in loc._track_candidates(holes, hx, hy, cov, w, moved_arm):
+                if loc._passes(c, hx, hy):
+                    new[c.holes] = new.get(c.holes, 0.0) + weight * math.exp(-0.5 * c.chi2)
+                    last[c.holes] = c
+        if not new:  # first grip, or every hypothesis died: start over from this grip
+            if self.hypotheses:
+                self.restarts += 1
+            verts, pose, chi2, res = loc._search(hx, hy, cov, w)
+            n = len(chi2) if loc.noise.tolerance is not None else int(np.searchsorted(chi2, loc._limit, "right"))
+            for i in range(n):
+                c = loc._candidate(verts[i], *pose[i], chi2[i], res[i])
+                if loc._passes(c, hx, hy):
+                    new[c.holes] = math.exp(-0.5 * (c.chi2 - chi2[0]))
+                    last[c.holes] = c
+        total = sum(new.values())
+        self.hypotheses = {k: v / total for k, v in new.items()} if total > 0 else {}
+        self._last = last
+        return self.fix
+
+    @property
+    def posterior(self) -> list[tuple[Candidate, float]]:
+        """Hypotheses with their probabilities, most likely first."""
+        return sorted(((self._last[k], p) for k, p in self.hypotheses.items()), key=lambda t: -t[1])
+
+    @property
+    def fix(self) -> Fix | None:
+        """The localisation once one hypothesis holds ``threshold`` of the probability, else None."""
+        if not self.hypotheses:
+            return None
+        key, p = max(self.hypotheses.items(), key=lambda kv: kv[1])
+        if p < self.threshold:
+            return None
+        b = self._last[key]
+        runner = max(((self._last[k], q) for k, q in self.hypotheses.items() if k != key),
+                     key=lambda t: t[1], default=(None, 0.0))[0]
+        return Fix(Candidate(b.holes, b.ids, b.pose, b.chi2, b.residual_cm, p), runner, len(self.hypotheses))
+
+
+def seed_adjacent_search(holes: HoleMap, q: object, geom: ClimberGeometry | None = None,
+                         precision: float = 0.1) -> list[tuple[tuple[int, int], ...]]:
+    """Seed 000's part 2, kept as the baseline: compare distances of *adjacent* holes only.
+
+    For every hole and its right / up-right / up / up-left neighbour (by grid id), if their
+    distance matches ``|hand1 - hand2|`` within ``precision`` cm, every hole adjacent to both
+    whose distances match the other two hand distances (either way round) completes a
+    solution. Unlabelled and unoriented, like the seed: mirror images are accepted, and the
+    first pair is not told apart (arm 1 or 2). Returns every match as three ids, in the
+    seed's order (p1, p2, p3). The seed's own code mixes ``&&`` and ``||`` and prints only
+    the last match; this is the search it describes, done right, O(N) over the whole map.
+    """
+    g = geom or ClimberGeometry()
+    h = hand_positions(as_array("joint angles q", q, (3, 2)), g)
+    h1 = float(np.linalg.norm(h[0] - h[1]))
+    h2 = float(np.linalg.norm(h[2] - h[1]))
+    h3 = float(np.linalg.norm(h[0] - h[2]))
+    index = holes._index  # type: ignore[attr-defined]
+    xy = holes.xy
+    out: list[tuple[tuple[int, int], ...]] = []
+    neighbours = [(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1) if (dx, dy) != (0, 0)]
+    for (cx, cy), a in index.items():
+        for dx, dy in ((1, 0), (1, 1), (0, 1), (-1, 1)):
+            b = index.get((cx + dx, cy + dy))
+            if b is None:
+                continue
+            d_ab = math.dist(xy[a], xy[b])
+            if abs(d_ab - h1) >= precision:
+                continue
+            bx, by = cx + dx, cy + dy
+            for ex, ey in neighbours:
+                kx, ky = cx + ex, cy + ey
+                if (kx, ky) == (bx, by) or max(abs(kx - bx), abs(ky - by)) > 1:
+                    continue
+                c = index.get((kx, ky))
+                if c is None:
+                    continue
+                d_bc, d_ac = math.dist(xy[b], xy[c]), math.dist(xy[a], xy[c])
+                if ((abs(d_bc - h2) < precision and abs(d_ac - h3) < precision)
+                        or (abs(d_bc - h3) < precision and abs(d_ac - h2) < precision)):
+                    out.append(((cx, cy), (bx, by), (kx, ky)))
+    return out
+
+
+@dataclass(frozen=True)
+class Grip:
+    """One simulated grip: the truth and what the encoders said (rad)."""
+
+    holes: tuple[int, int, int]
+    pose: np.ndarray
+    q_true: np.ndarray
+    q_measured: np.ndarray
+    moved_arm: int | None = None
+
+
+class GripSimulator:
+    """Random grips and climbing walks on a wall, with encoder noise - the seed's
+    "emulate with artificial errors", used by the sensor study, the benchmark and the tests.
+
+    Stances are drawn uniformly over the holdable triangles of the index, with a random arm
+    assignment, a body centre uniform where every hole is within reach (``margin`` cm inside
+    the annulus), a random heading and random elbow branches. Encoder readings get Gaussian
+    noise ``sigma`` (rad) and are then rounded to ``quantum`` (rad, 0 = none).
+    """
+
+    def __init__(self, index: TriangleIndex, geom: ClimberGeometry, sigma: float, quantum: float = 0.0,
+                 margin: float = 0.5, seed: int | None = 0) -> None:
+        self.index, self.geom = index, geom
+        self.holes = index.holes
+        self.sigma, self.quantum, self.margin = float(sigma), float(quantum), float(margin)
+        self.rng = np.random.default_rng(seed)
+        self.r_out = geom.l1 + geom.l2 - margin
+        self.r_in = np.abs(geom.l1 - geom.l2) + margin
+        if len(index) == 0:
+            raise InvalidInputError(f"map '{self.holes.name}' has no hole triangle the robot can hold")
+
+    def _centre(self, p: np.ndarray) -> np.ndarray | None:
+        """A body centre with hole i within [r_in, r_out] of shoulder i (heading 0 offsets ignored)."""
+        rng = self.rng
+        k = int(np.argmin(self.r_out))
+        for _ in range(200):
+            ang, rad = rng.uniform(0, 2 * math.pi), self.r_out[k] * math.sqrt(rng.uniform())
+            c = p[k] + rad * np.array([math.cos(ang), math.sin(ang)])
+            d = np.linalg.norm(p - c, axis=1)
+            if np.all(d <= self.r_out) and np.all(d >= self.r_in):
+                return c
+        return None
+
+    def _read(self, holes: Sequence[int], moved: int | None) -> Grip | None:
+        p = self.holes.xy[list(holes)]
+        c = self._centre(p - np.linalg.norm(self.geom.shoulders, axis=1).max() * 0)
+        if c is None:
+            return None
+        heading = self.rng.uniform(-math.pi, math.pi)
+        branch = self.rng.choice([-1, 1], size=3)
+        q = inverse_program(p, c, heading, self.geom, branch)
+        qm = q + self.rng.normal(0.0, self.sigma, q.shape) if self.sigma > 0 else q.copy()
+        if self.quantum > 0:
+            qm = np.round(qm / self.quantum) * self.quantum
+        return Grip(tuple(int(v) for v in holes), np.array([c[0], c[1], heading]), q, qm, moved)  # type: ignore[arg-type]
+
+    def grip(self) -> Grip:
+        """A random stance anywhere on the wall."""
+        tri = self.index.triangles
+        while True:
+            t = tri[self.rng.integers(len(tri))][self.rng.permutation(3)]
+            g = self._read(t, None)
+            if g is not None:
+                return g
+
+    def step(self, grip: Grip) -> Grip:
+        """One climbing move: one arm lets go and grips another hole, the body re-centres."""
+        rng = self.rng
+        for arm in rng.permutation(3):
+            kept = [grip.holes[i] for i in range(3) if i != arm]
+            near = self.holes.within(self.holes.xy[kept[0]], 2 * float(self.r_out.max()))
+            near = [int(j) for j in rng.permutation(near) if j not in grip.holes]
+            for j in near:
+                holes = list(grip.holes)
+                holes[arm] = j
+                g = self._read(holes, int(arm) + 1)
+                if g is not None:
+                    return g
+        return self.grip()
+
+    def walk(self, n: int) -> list[Grip]:
+        """A lost start: a random stance and ``n - 1`` moves."""
+        out = [self.grip()]
+        while len(out) < n:
+            out.append(self.step(out[-1]))
+        return out
+
+
+def sensor_study(
+    holes: HoleMap,
+    sigmas_rad: Sequence[float],
+    geom: ClimberGeometry | None = None,
+    trials: int = 2000,
+    walks: int = 100,
+    max_grips: int = 10,
+    map_sigma: float = 0.01,
+    quantum: float = 0.0,
+    seed: int = 0,
+    progress: Callable[[int], None] | None = None,
+) -> list[dict[str, float]]:
+    """What encoders does the robot need on this wall? Simulated grips per noise level.
+
+    For every ``sigma`` (rad): ``trials`` random grips localised globally, classified as
+    correct (unique and right), ambiguous, none, or wrong (unique but wrong); how often the
+    gate keeps the true holes; the centre error at the true holes (median, p99, cm); global
+    and tracking times; and ``walks`` lost starts (random climbing walks, a Bayes filter
+    over hypotheses) - grips needed until one hypothesis holds 0.999 (median, and the share
+    localised correctly within 3 grips), plus tracking along the walks (correct / wrong).
+    ``progress`` is called with the number of finished units (grips and walks).
+    """
+    import time
+
+    g = geom or ClimberGeometry()
+    index = TriangleIndex(holes, g)
+    rows = []
+    for k, sigma in enumerate(sigmas_rad):
+        noise = NoiseModel(sigma_angle=float(sigma), sigma_map=map_sigma)
+        loc = Localizer(holes, g, noise, index)
+        sim = GripSimulator(index, g, float(sigma), quantum=quantum, seed=seed + 1000 * k)
+        counts = {"correct": 0, "ambiguous": 0, "none": 0, "wrong": 0}
+        kept, err, t_global = 0, [], []
+        for _ in range(trials):
+            grip = sim.grip()
+            t0 = time.perf_counter()
+            try:
+                fix = loc.localize(grip.q_measured)
+                counts["correct" if fix.holes == grip.holes else "wrong"] += 1
+            except AmbiguousFixError:
+                counts["ambiguous"] += 1
+            except NoFixError:
+                counts["none"] += 1
+            t_global.append(time.perf_counter() - t0)
+            hx, hy, _, w = loc._measure(grip.q_measured)
+            v = grip.holes
+            x, y, _, chi2, _ = _fit_one([loc._xs[i] for i in v], [loc._ys[i] for i in v], hx, hy, w)
+            kept += chi2 <= loc._limit
+            err.append(math.hypot(x - grip.pose[0], y - grip.pose[1]))
+            if progress:
+                progress(1)
+        bayes = BayesLocalizer(loc)
+        needed, within3, walk_wrong = [], 0, 0
+        track = {"correct": 0, "ambiguous": 0, "none": 0, "wrong": 0}
+        t_track = []
+        for _ in range(walks):
+            bayes.reset()
+            path = sim.walk(max_grips)
+            done = None
+            for n, grip in enumerate(path, start=1):
+                fix = bayes.observe(grip.q_measured, grip.moved_arm)
+                if fix is not None and done is None:
+                    done = n
+                    walk_wrong += fix.holes != grip.holes
+                    within3 += n <= 3 and fix.holes == grip.holes
+                if n > 1:
+                    t0 = time.perf_counter()
+                    try:
+                        tf = loc.track(path[n - 2].holes, grip.q_measured, grip.moved_arm)
+                        track["correct" if tf.holes == grip.holes else "wrong"] += 1
+                    except AmbiguousFixError:
+                        track["ambiguous"] += 1
+                    except NoFixError:
+                        track["none"] += 1
+                    t_track.append(time.perf_counter() - t0)
+            needed.append(done if done is not None else math.inf)
+            if progress:
+                progress(1)
+        n_track = max(1, sum(track.values()))
+        rows.append({
+            "sigma_deg": math.degrees(float(sigma)),
+            "grips": trials,
+            "correct": counts["correct"] / trials,
+            "ambiguous": counts["ambiguous"] / trials,
+            "none": counts["none"] / trials,
+            "wrong": counts["wrong"] / trials,
+            "true_kept": kept / trials,
+            "centre_err_median_cm": float(np.median(err)),
+            "centre_err_p99_cm": float(np.percentile(err, 99)),
+            "global_us_median": float(np.median(t_global) * 1e6),
+            "walks": walks,
+            "grips_needed_median": float(np.median(needed)),
+            "lost_within_3": within3 / max(1, walks),
+            "lost_wrong": walk_wrong / max(1, walks),
+            "track_correct": track["correct"] / n_track,
+            "track_wrong": track["wrong"] / n_track,
+            "track_us_median": float(np.median(t_track) * 1e6) if t_track else float("nan"),
+        })
+    return rows
