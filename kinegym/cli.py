@@ -203,7 +203,23 @@ def cmd_demo(args: argparse.Namespace) -> int:
     png = _plot_climber(out / "climber_on_seed_wall.png", holes, [*centre, 0.0], q_wall, geom, wall)
     files.append(str(png))
 
-    # 3. the writing arm: every IK branch of seed 002's task 6.4 points, FK round trip
+    # 3. localisation of seed 000's example angles on its wall
+    from kinematics.localization import AmbiguousFixError, Localizer, NoiseModel
+
+    angles = np.radians([[-24, 85], [78, 55], [-155, 103]])
+    fix = Localizer(wall, geom, NoiseModel(tolerance=0.15)).localize(angles)
+    try:
+        Localizer(wall, geom, NoiseModel.from_degrees(0.289)).localize(angles)
+        note = "unique also with the angles' 1-deg rounding as noise"
+    except AmbiguousFixError as err:
+        note = (f"with the angles' 1-deg rounding as noise: {err.count} triples fit, this one p="
+                f"{err.candidates[0].likelihood:.2f}")
+    rows.append(("localise seed 000's example", f"arms on {fix.ids}, centre ({fix.centre[0]:.2f}, "
+                 f"{fix.centre[1]:.2f}) cm (seed printed the mirror (2,3),(3,3),(3,2)); {note}", "ok"))
+    png = _plot_climber(out / "localised_seed_example.png", wall.xy[list(fix.holes)], fix.pose, angles, geom, wall)
+    files.append(str(png))
+
+    # 4. the writing arm: every IK branch of seed 002's task 6.4 points, FK round trip
     arm = WritingArm.from_config("pincher")
     pts = np.array([[12, 7, 5], [-10, 8, 10], [-13, -13, 4], [8, -12, 6], [15, 0, 7]], float)
     targets = np.concatenate([pts, np.full((5, 1), -math.pi / 2)], axis=1)
@@ -219,6 +235,130 @@ def cmd_demo(args: argparse.Namespace) -> int:
     lines += ["", f"done in {elapsed:.2f} s; files:"] + [f"  {p}" for p in files]
     _emit(args, {"steps": [{"step": a, "result": b, "status": c} for a, b, c in rows],
                  "files": files, "seconds": elapsed}, "\n".join(lines))
+    return EXIT_OK
+
+
+def _wall(spec: str, args: argparse.Namespace) -> Any:
+    """A wall from a config name/path, or ``grid:COLSxROWS`` generated with --spacing/--jitter/--seed."""
+    from kinematics.localization import HoleMap
+
+    if spec.startswith("grid:"):
+        try:
+            cols, rows = (int(v) for v in spec[5:].lower().split("x"))
+        except ValueError:
+            raise UsageError(f"--wall {spec!r} is not grid:COLSxROWS, e.g. grid:50x50") from None
+        return HoleMap.grid(cols, rows, spacing=args.spacing, jitter=args.jitter, seed=args.seed)
+    return HoleMap.from_config(spec)
+
+
+def _noise(args: argparse.Namespace, geom: Any) -> Any:
+    from kinematics.localization import NoiseModel
+
+    if args.tolerance is not None:
+        if not (math.isfinite(args.tolerance) and args.tolerance > 0):
+            raise UsageError(f"--tolerance {args.tolerance!r} is not a length > 0 cm")
+        return NoiseModel(tolerance=args.tolerance)
+    sigma = math.degrees(geom.sensor_sigma) if args.sigma is None else args.sigma
+    if not (math.isfinite(sigma) and sigma > 0):
+        raise UsageError(f"--sigma {sigma!r} is not an angle > 0 deg")
+    if not (math.isfinite(args.map_sigma) and args.map_sigma >= 0):
+        raise UsageError(f"--map-sigma {args.map_sigma!r} is not a length >= 0 cm")
+    return NoiseModel(sigma_angle=math.radians(sigma), sigma_map=args.map_sigma)
+
+
+def cmd_localize(args: argparse.Namespace) -> int:
+    from kinematics.localization import AmbiguousFixError, Localizer, NoFixError
+
+    q = np.radians(parse_triples(args.angles, "--angles"))
+    geom = _climber_geometry(args)
+    wall = _wall(args.wall, args)
+    noise = _noise(args, geom)
+    loc = Localizer(wall, geom, noise)
+    gate = (f"tolerance {noise.tolerance:g} cm" if noise.tolerance is not None else
+            f"sigma {math.degrees(noise.sigma_angle):g} deg, map {noise.sigma_map:g} cm, "
+            f"chi2 <= {noise.chi2_limit:.3g}")
+    try:
+        fix = loc.localize(q)
+    except AmbiguousFixError as err:
+        cands = err.candidates[:10]
+        lines = [f"ambiguous on '{wall.name}' ({gate}): {err.count} hole triples fit; most likely:"]
+        lines += [f"  p={c.likelihood:.4f}  arms 1,2,3 on {c.ids}  centre ({c.pose[0]:.3f}, {c.pose[1]:.3f}) cm"
+                  for c in cands]
+        if args.plot:
+            _plot_localisation(args.plot, wall, q, geom, cands[:3], f"ambiguous: {err.count} candidates")
+            lines.append(f"plot: {args.plot}")
+        _emit(args, {"error": "AmbiguousFixError", "count": err.count,
+                     "candidates": [c.as_dict() for c in cands]}, "\n".join(lines))
+        return EXIT_NO_ANSWER
+    except NoFixError as err:
+        best = err.best
+        _emit(args, {"error": "NoFixError", "message": str(err), "best": best.as_dict() if best else None},
+              f"no fix on '{wall.name}' ({gate}): {err}")
+        return EXIT_NO_ANSWER
+    std = np.sqrt(np.diag(fix.covariance))
+    lines = [f"fix on '{wall.name}' ({gate})"]
+    for i in range(3):
+        lines.append(f"  arm {i + 1}: hole {fix.ids[i]}  residual {fix.best.residual_cm[i]:.4f} cm")
+    lines.append(f"  centre ({fix.centre[0]:.4f}, {fix.centre[1]:.4f}) cm +- ({std[0]:.3f}, {std[1]:.3f}), "
+                 f"heading {math.degrees(fix.heading):.3f} +- {math.degrees(std[2]):.3f} deg, chi2 {fix.best.chi2:.3g}")
+    if fix.runner_up is not None:
+        lines.append(f"  runner-up {fix.runner_up.ids} chi2 {fix.runner_up.chi2:.3g}")
+    if args.plot:
+        _plot_localisation(args.plot, wall, q, geom, [fix.best], "fix")
+        lines.append(f"plot: {args.plot}")
+    _emit(args, fix.as_dict(), "\n".join(lines))
+    return EXIT_OK
+
+
+def _plot_localisation(path: str, wall: Any, q: np.ndarray, geom: Any, cands: Sequence[Any], title: str) -> None:
+    from envs.draw import draw_climber, draw_wall, fit_canvas
+
+    canvas = fit_canvas(wall.xy, margin=14.0, scale=max(2.0, min(9.0, 900 / max(1.0, float(np.ptp(wall.xy))))))
+    draw_wall(canvas, wall, labels=len(wall) <= 400)
+    for k, c in enumerate(cands):
+        draw_climber(canvas, c.pose, q, geom, alpha=1.0 if k == 0 else 0.35, label=k == 0)
+    canvas.caption([title] + [f"p={c.likelihood:.3f} {c.ids}" for c in cands])
+    canvas.save(path)
+
+
+def cmd_sensor_study(args: argparse.Namespace) -> int:
+    from envs.draw import line_chart, save_rgb
+    from kinegym.progress import Progress
+    from kinematics.localization import sensor_study
+
+    sigmas = [float(v) for v in parse_floats(args.sigmas, len(args.sigmas.split(",")), "--sigmas")]
+    if any(s <= 0 for s in sigmas):
+        raise UsageError(f"--sigmas {args.sigmas!r} must all be > 0 deg")
+    if args.trials < 1 or args.walks < 0:
+        raise UsageError(f"--trials {args.trials} / --walks {args.walks}: need trials >= 1, walks >= 0")
+    geom = _climber_geometry(args)
+    wall = _wall(args.wall, args)
+    out = Path(args.out)
+    with Progress(len(sigmas) * (args.trials + args.walks), "sensor study", enabled=not args.json) as bar:
+        rows = sensor_study(wall, [math.radians(s) for s in sigmas], geom, args.trials, args.walks,
+                            map_sigma=args.map_sigma, seed=args.seed, progress=bar.update)
+    head = (f"{'sigma':>6} {'correct':>8} {'ambig':>7} {'none':>6} {'wrong':>7} {'kept':>7} "
+            f"{'err med':>8} {'err p99':>8} {'grips':>6} {'<=3':>6} {'track':>7}")
+    lines = [f"sensor study on '{wall.name}' ({len(wall)} holes): {args.trials} grips and {args.walks} walks per sigma",
+             head]
+    for r in rows:
+        lines.append(f"{r['sigma_deg']:6.3g} {r['correct']:8.2%} {r['ambiguous']:7.2%} {r['none']:6.2%} "
+                     f"{r['wrong']:7.3%} {r['true_kept']:7.2%} {r['centre_err_median_cm']:8.4f} "
+                     f"{r['centre_err_p99_cm']:8.4f} {r['grips_needed_median']:6.3g} {r['lost_within_3']:6.1%} "
+                     f"{r['track_correct']:7.2%}")
+    lines.append("(sigma in deg; err = centre error at the true holes in cm; grips = median grips from a lost start)")
+    out.mkdir(parents=True, exist_ok=True)
+    xs = [r["sigma_deg"] for r in rows]
+    chart = line_chart({"unique & correct (1 grip)": (xs, [r["correct"] for r in rows]),
+                        "ambiguous (1 grip)": (xs, [r["ambiguous"] for r in rows]),
+                        "wrong (1 grip)": (xs, [r["wrong"] for r in rows]),
+                        "lost start: localised <= 3 grips": (xs, [r["lost_within_3"] for r in rows]),
+                        "tracking correct": (xs, [r["track_correct"] for r in rows])},
+                       f"Localisation on '{wall.name}' vs encoder noise", "encoder sigma (deg)", "share",
+                       log_x=True, ylim=(0.0, 1.0))
+    png = save_rgb(chart, out / "sensor_study.png")
+    lines.append(f"plot: {png}")
+    _emit(args, {"wall": wall.name, "holes": len(wall), "rows": rows, "plot": str(png)}, "\n".join(lines))
     return EXIT_OK
 
 
@@ -305,6 +445,36 @@ def build_parser() -> argparse.ArgumentParser:
     fa.add_argument("--arm", default="pincher", help="arm config name or YAML path")
     common(fa)
     fa.set_defaults(func=cmd_fk_arm)
+
+    def wall_opts(sp: argparse.ArgumentParser) -> None:
+        sp.add_argument("--wall", default="seed_4x4",
+                        help="wall config name, YAML path, or grid:COLSxROWS (default seed_4x4)")
+        sp.add_argument("--spacing", type=float, default=20.0, help="grid: hole spacing in cm")
+        sp.add_argument("--jitter", type=float, default=0.5, help="grid: +- jitter per coordinate in cm")
+        sp.add_argument("--seed", type=int, default=0, help="grid and simulation seed")
+        sp.add_argument("--map-sigma", type=float, default=None,
+                        help="1-sigma error of the mapped hole positions in cm")
+
+    lo = sub.add_parser("localize", help="which holes the climber holds, and where it is, from six angles")
+    lo.add_argument("--angles", required=True, help='measured shoulder,elbow per arm in deg: "S1,E1;S2,E2;S3,E3"')
+    g = lo.add_mutually_exclusive_group()
+    g.add_argument("--sigma", type=float, default=None, help="encoder noise, 1 sigma in deg (default: robot config)")
+    g.add_argument("--tolerance", type=float, default=None, help="seed mode: fixed distance tolerance in cm")
+    lo.add_argument("--plot", default=None, help="PNG of the map with the robot at the fix")
+    wall_opts(lo)
+    climber_opts(lo)
+    common(lo)
+    lo.set_defaults(func=cmd_localize, map_default=0.05)
+
+    ss = sub.add_parser("sensor-study", help="simulated grips per encoder noise level: what encoders are needed")
+    ss.add_argument("--sigmas", default="0.1,0.25,0.5,1", help="encoder noise levels in deg")
+    ss.add_argument("--trials", type=int, default=2000, help="grips per noise level")
+    ss.add_argument("--walks", type=int, default=100, help="lost-start walks per noise level")
+    ss.add_argument("--out", default="kinegym-out", help="folder for sensor_study.png")
+    wall_opts(ss)
+    climber_opts(ss)
+    common(ss)
+    ss.set_defaults(func=cmd_sensor_study, map_default=0.01)
     return p
 
 
@@ -339,6 +509,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ]
     try:
         args = build_parser().parse_args(argv)
+        if getattr(args, "map_sigma", 0) is None:
+            args.map_sigma = args.map_default
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args)
     except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]

@@ -91,3 +91,30 @@ def test_import_kinegym_is_light() -> None:
             "print(sorted(m for m in ('pymunk', 'pygame', 'cv2', 'torch') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_localize_seed_example(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    angles = "-24,85;78,55;-155,103"
+    code, out, _ = run(capsys, "localize", "--angles", angles, "--tolerance", "0.15", "--json")
+    assert code == 0
+    assert json.loads(out)["ids"] == [[4, 3], [3, 3], [3, 2]]
+    plot = tmp_path / "amb.png"
+    code, out, _ = run(capsys, "localize", "--angles", angles, "--sigma", "0.5", "--json", "--plot", str(plot))
+    assert code == 3
+    res = json.loads(out)
+    assert res["error"] == "AmbiguousFixError" and res["candidates"][0]["ids"] == [[4, 3], [3, 3], [3, 2]]
+    assert plot.exists()
+    code, _, err = run(capsys, "localize", "--angles", angles, "--sigma", "-1")
+    assert code == 2 and "--sigma" in err
+    code, _, err = run(capsys, "localize", "--angles", angles, "--wall", "grid:ax3")
+    assert code == 2 and "grid:ax3" in err
+
+
+def test_sensor_study_cli(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    code, out, _ = run(capsys, "sensor-study", "--sigmas", "0.2,1", "--trials", "60", "--walks", "5",
+                       "--out", str(tmp_path), "--json")
+    assert code == 0
+    res = json.loads(out)
+    assert [round(r["sigma_deg"], 6) for r in res["rows"]] == [0.2, 1.0]
+    assert all(r["wrong"] == 0 for r in res["rows"])
+    assert (tmp_path / "sensor_study.png").stat().st_size > 5000
