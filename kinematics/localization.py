@@ -801,8 +801,16 @@ class Localizer:
         verts = np.concatenate(found)
         if len(found) > 1:
             verts = np.unique(verts, axis=0)
-        h = np.array([hx, hy]).T
-        pose, chi2, res = _fit(self.holes.xy[verts], h, np.array([[[a, b], [b, c]] for a, b, c in w]))
+        if len(verts) <= 16:  # a few candidates: the scalar fit beats numpy's per-call overhead
+            xs, ys = self._xs, self._ys
+            fits = [_fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w)
+                    for v in verts.tolist()]
+            pose = np.array([f[:3] for f in fits])
+            chi2 = np.array([f[3] for f in fits])
+            res = np.array([f[4] for f in fits])
+        else:
+            h = np.array([hx, hy]).T
+            pose, chi2, res = _fit(self.holes.xy[verts], h, np.array([[[a, b], [b, c]] for a, b, c in w]))
         order = np.argsort(chi2, kind="stable")
         return verts[order], pose[order], chi2[order], res[order]
 
