@@ -1102,6 +1102,16 @@ class GripSimulator:
         return out
 
 
+def _outcome(attempt: Callable[[], Fix], truth: tuple[int, int, int]) -> str:
+    """Classify one localisation attempt: correct, wrong (unique but wrong), ambiguous or none."""
+    try:
+        return "correct" if attempt().holes == truth else "wrong"
+    except AmbiguousFixError:
+        return "ambiguous"
+    except NoFixError:
+        return "none"
+
+
 def sensor_study(
     holes: HoleMap,
     sigmas_rad: Sequence[float],
@@ -1138,13 +1148,7 @@ def sensor_study(
         for _ in range(trials):
             grip = sim.grip()
             t0 = time.perf_counter()
-            try:
-                fix = loc.localize(grip.q_measured)
-                counts["correct" if fix.holes == grip.holes else "wrong"] += 1
-            except AmbiguousFixError:
-                counts["ambiguous"] += 1
-            except NoFixError:
-                counts["none"] += 1
+            counts[_outcome(lambda g=grip, lc=loc: lc.localize(g.q_measured), grip.holes)] += 1
             t_global.append(time.perf_counter() - t0)
             hx, hy, _, w = loc._measure(grip.q_measured)
             v = grip.holes
@@ -1169,13 +1173,9 @@ def sensor_study(
                     within3 += n <= 3 and fix.holes == grip.holes
                 if n > 1:
                     t0 = time.perf_counter()
-                    try:
-                        tf = loc.track(path[n - 2].holes, grip.q_measured, grip.moved_arm)
-                        track["correct" if tf.holes == grip.holes else "wrong"] += 1
-                    except AmbiguousFixError:
-                        track["ambiguous"] += 1
-                    except NoFixError:
-                        track["none"] += 1
+                    prev = path[n - 2].holes
+                    track[_outcome(lambda g=grip, h=prev, lc=loc: lc.track(h, g.q_measured, g.moved_arm),
+                                   grip.holes)] += 1
                     t_track.append(time.perf_counter() - t0)
             needed.append(done if done is not None else math.inf)
             if progress:
