@@ -277,25 +277,6 @@ class NoiseModel:
         """Gate on the fit's chi-square: ``P(chi2_3 > limit) = p_gate``."""
         return self._limit  # type: ignore[attr-defined]
 
-    def hand_covariances(self, q: np.ndarray, geom: ClimberGeometry) -> np.ndarray:
-        """Body-frame covariance of each hand, ``(3, 2, 2)`` cm^2 (joint noise + map error)."""
-        s, e = q[:, 0], q[:, 1]
-        lower = s - e + math.pi
-        d_lower = geom.l2[:, None] * np.stack([-np.sin(lower), np.cos(lower)], -1)
-        d_s = geom.l1[:, None] * np.stack([-np.sin(s), np.cos(s)], -1) + d_lower
-        jac = np.stack([d_s, -d_lower], axis=-1)  # (3, 2, 2): d hand / d (s, e)
-        cov = self.sigma_angle ** 2 * jac @ np.swapaxes(jac, -1, -2)
-        return cov + self.sigma_map ** 2 * np.eye(2)
-
-    def tolerance_for(self, link: float = 10.0) -> float:
-        """A fixed tolerance (cm) equivalent to this noise for links of ``link`` cm (for the seed mode).
-
-        The 99.99 % bound on a hand-to-hand distance error for stretched-ish arms.
-        """
-        sigma_hand = math.sqrt(5.0) * link * self.sigma_angle  # two joints, lever arms ~2l and l
-        sigma_d = math.sqrt(2.0) * math.hypot(sigma_hand, self.sigma_map)
-        return math.sqrt(self.chi2_limit) * sigma_d
-
 
 @dataclass(frozen=True)
 class Candidate:
@@ -688,10 +669,6 @@ class Localizer:
             w.append((c / det, -b / det, a / det))
         return hx, hy, cov, w
 
-    @staticmethod
-    def _cov_array(cov: Sequence[tuple[float, float, float]]) -> np.ndarray:
-        return np.array([[[a, b], [b, c]] for a, b, c in cov])
-
     def _candidate(self, holes: Sequence[int], x: float, y: float, th: float, chi2: float,
                    res: Sequence[float], lik: float = 1.0) -> Candidate:
         ids = self._ids
@@ -1059,7 +1036,7 @@ class GripSimulator:
 
     def _read(self, holes: Sequence[int], moved: int | None) -> Grip | None:
         p = self.holes.xy[list(holes)]
-        c = self._centre(p - np.linalg.norm(self.geom.shoulders, axis=1).max() * 0)
+        c = self._centre(p)
         if c is None:
             return None
         heading = self.rng.uniform(-math.pi, math.pi)
