@@ -8,8 +8,9 @@ missing holes, reproducibly from a seed.
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -200,20 +201,43 @@ class NoFixError(LocalizationError):
 class AmbiguousFixError(LocalizationError):
     """Several hole triples pass the gate. ``candidates`` lists them, most likely first, each
     with its ``likelihood`` (probability among them); ``count`` says how many there are.
+
+    A global fix on a big regular wall stops as soon as two triples pass; the full list
+    (hundreds of triples there) is worked out only when ``candidates``, ``count`` or the
+    message is first asked for (``resolve``).
     """
 
-    def __init__(self, message: str, candidates: Sequence[Candidate] | None = None, count: int | None = None,
-                 build: Callable[[], list[Candidate]] | None = None) -> None:
-        super().__init__(message)
+    def __init__(self, message: str | None = None, candidates: Sequence[Candidate] | None = None,
+                 count: int | None = None, build: Callable[[], list[Candidate]] | None = None,
+                 resolve: Callable[[], AmbiguousFixError] | None = None) -> None:
+        super().__init__(message if message is not None else "ambiguous fix (details on demand)")
+        self._message = message
         self._candidates = None if candidates is None else tuple(candidates)
         self._build = build
-        self.count = len(self._candidates) if count is None and self._candidates is not None else count
+        self._count = count
+        self._resolve = resolve
+
+    def _resolved(self) -> None:
+        if self._resolve is not None:
+            full, self._resolve = self._resolve(), None
+            self._message, self._candidates, self._count = full._message, full.candidates, full.count
+            self.args = (self._message,)
 
     @property
     def candidates(self) -> tuple[Candidate, ...]:
+        self._resolved()
         if self._candidates is None:
             self._candidates = tuple(self._build()) if self._build else ()
         return self._candidates
+
+    @property
+    def count(self) -> int:
+        self._resolved()
+        return len(self.candidates) if self._count is None else self._count
+
+    def __str__(self) -> str:
+        self._resolved()
+        return str(self._message)
 
 
 def chi2_3_cdf(x: float) -> float:
@@ -415,8 +439,13 @@ def _fit(p: np.ndarray, h: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray,
 
 
 def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: Sequence[float],
-             w: Sequence[tuple[float, float, float]]) -> tuple[float, float, float, float, list[float]]:
-    """:func:`_fit` for one triple in plain Python: ``(x, y, heading, chi2, residuals)``."""
+             w: Sequence[tuple[float, float, float]], steps: int = _GN_STEPS
+             ) -> tuple[float, float, float, float, list[float]]:
+    """:func:`_fit` for one triple in plain Python: ``(x, y, heading, chi2, residuals)``.
+
+    ``steps=0`` stops at the unweighted (Kabsch) pose: its chi-square is an upper bound of the
+    weighted optimum's, so ``chi2 <= gate`` there proves the triple passes, at a third of the cost.
+    """
     hmx, hmy = (hx[0] + hx[1] + hx[2]) / 3, (hy[0] + hy[1] + hy[2]) / 3
     pmx, pmy = (px[0] + px[1] + px[2]) / 3, (py[0] + py[1] + py[2]) / 3
     dot = cross = 0.0
@@ -427,7 +456,7 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
     th = math.atan2(cross, dot)
     c, s = math.cos(th), math.sin(th)
     tx, ty = pmx - (c * hmx - s * hmy), pmy - (s * hmx + c * hmy)
-    for it in range(_GN_STEPS + 1):
+    for it in range(steps + 1):
         chi2 = 0.0
         res = []
         h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
@@ -439,7 +468,7 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
             wbx, wby = w00 * bx + w01 * by, w01 * bx + w11 * by
             chi2 += bx * wbx + by * wby
             res.append(math.sqrt(bx * bx + by * by))
-            if it == _GN_STEPS:
+            if it == steps:
                 continue
             # columns: d b/d tx = (-c, s), d b/d ty = (-s, -c), d b/d th = (-s dx + c dy, -c dx - s dy)
             ax_, ay_ = -c, s
@@ -457,7 +486,7 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
             g0 += ax_ * wbx + ay_ * wby
             g1 += bx_ * wbx + by_ * wby
             g2 += cx_ * wbx + cy_ * wby
-        if it == _GN_STEPS:
+        if it == steps:
             break
         # solve H d = -g (3x3 symmetric) by Cramer's rule
         det = (h00 * (h11 * h22 - h12 * h12) - h01 * (h01 * h22 - h12 * h02) + h02 * (h01 * h12 - h11 * h02))
@@ -470,6 +499,19 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
         tx, ty, th = tx + d0, ty + d1, th + d2
         c, s = math.cos(th), math.sin(th)
     return tx, ty, math.remainder(th, 2 * math.pi), chi2, res
+
+
+def _inv3(m: list[list[float]]) -> list[list[float]]:
+    """Inverse of a 3 x 3 matrix (nested lists) by cofactors: no numpy call overhead."""
+    (a, b, c), (d, e, f), (g, h, i) = m
+    A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
+    det = a * A + b * B + c * C
+    if det == 0:
+        raise InvalidInputError("degenerate hand triangle: its side covariance is singular")
+    r = 1.0 / det
+    return [[A * r, (c * h - b * i) * r, (b * f - c * e) * r],
+            [B * r, (a * i - c * g) * r, (c * d - a * f) * r],
+            [C * r, (b * g - a * h) * r, (a * e - b * d) * r]]
 
 
 def _pose_covariance(pose: np.ndarray, h: np.ndarray, cov_body: np.ndarray) -> np.ndarray:
@@ -508,13 +550,15 @@ class TriangleIndex:
             np.linalg.norm(xy[tri[:, 2]] - xy[tri[:, 0]], axis=1),
         ], -1)
         self.triangles, self.sides = tri, sides
-        n = len(tri)
         rot_sides = np.concatenate([sides, np.roll(sides, -1, axis=1), np.roll(sides, -2, axis=1)])
+        rot_tri = np.concatenate([tri, np.roll(tri, -1, axis=1), np.roll(tri, -2, axis=1)])
         keys = self._keys(np.floor(rot_sides / self.cell).astype(np.int64))
         order = np.argsort(keys, kind="stable")
         self.keys = keys[order]
-        self.entry_tri = (order % n).astype(np.int64) if n else order
-        self.entry_rot = (order // n).astype(np.int8) if n else order.astype(np.int8)
+        # each entry's vertices and sides in its own rotation, contiguous in key order, so a
+        # query is a few slices: no per-entry gather through the triangle table
+        self.entry_verts = np.ascontiguousarray(rot_tri[order].astype(np.int32 if len(xy) < 2**31 else np.int64))
+        self.entry_sides = np.ascontiguousarray(rot_sides[order])
 
     @staticmethod
     def _keys(cells: np.ndarray) -> np.ndarray:
@@ -524,30 +568,85 @@ class TriangleIndex:
     def __len__(self) -> int:
         return len(self.triangles)
 
-    def query(self, sides: Sequence[float], half_width: Sequence[float]) -> np.ndarray:
-        """Hole triples ``(K, 3)`` (in the query's vertex order) whose sides match within the widths."""
-        s = np.asarray(sides, dtype=np.float64)
-        w = np.asarray(half_width, dtype=np.float64)
-        lo = np.floor((s - w) / self.cell).astype(np.int64)
-        hi = np.floor((s + w) / self.cell).astype(np.int64)
-        r0, r1 = np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1)
-        r2 = np.arange(lo[2], hi[2] + 1)
-        first = self._keys(np.stack(np.meshgrid(r0, r1, [lo[2]], indexing="ij"), -1).reshape(-1, 3))
-        # cells along the last axis are contiguous keys: one range per (i0, i1)
-        a = np.searchsorted(self.keys, first, "left")
-        b = np.searchsorted(self.keys, first + len(r2), "left")
-        counts = b - a
-        total = int(counts.sum())
-        if total == 0:
-            return np.empty((0, 3), dtype=np.int64)
-        starts = np.repeat(a - np.cumsum(counts) + counts, counts) + np.arange(total)
-        tri = self.entry_tri[starts]
-        rot = self.entry_rot[starts].astype(np.int64)
-        got = self.sides[tri[:, None], (np.arange(3)[None, :] + rot[:, None]) % 3]
-        keep = np.all(np.abs(got - s) <= w, axis=1)
-        tri, rot = tri[keep], rot[keep]
-        verts = self.triangles[tri[:, None], (np.arange(3)[None, :] + rot[:, None]) % 3]
-        return verts
+    def cell_of(self, sides: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+        """Entries of the one cell that holds ``sides`` (cm, the query's vertex order):
+        ``verts (K, 3)`` and their sides ``(K, 3)``, views into the index (one binary search)."""
+        lim, cell = (1 << 20) - 1, self.cell
+        i0, i1, i2 = (min(max(math.floor(v / cell), 0), lim) for v in sides)
+        key = (i0 << 40) | (i1 << 20) | i2
+        a = int(self.keys.searchsorted(key, "left"))
+        b = int(self.keys.searchsorted(key, "right"))
+        return self.entry_verts[a:b], self.entry_sides[a:b]
+
+    def query(self, sides: Sequence[float], half_width: Sequence[float],
+              cov: Sequence[Sequence[float]] | None = None, limit: float | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Triples whose sides lie near ``sides`` (cm, the query's vertex order).
+
+        Without ``cov``: within the box ``|side - sides| <= half_width``. With ``cov`` (the
+        3 x 3 covariance of the measured sides) and ``limit``: every triple whose side
+        residual ``r`` may satisfy ``r' cov^-1 r <= limit``. The ellipsoid is sliced axis by
+        axis (the range of side 1 given side 0's cell, of side 2 given both), so a strongly
+        correlated covariance - all three sides stretching together - does not drag in the
+        whole bounding box. The caller applies the exact test to what comes back.
+
+        Returns ``verts (K, 3)`` (map rows in the query's vertex order) and their sides
+        ``(K, 3)`` in the same order.
+        """
+        s0, s1, s2 = (float(v) for v in sides)
+        cell, lim = self.cell, (1 << 20) - 1
+        first: list[int] = []
+        last: list[int] = []
+
+        def add(i0: int, i1: int, lo2: int, hi2: int) -> None:
+            if hi2 < lo2:
+                return
+            i0, i1 = min(max(i0, 0), lim), min(max(i1, 0), lim)
+            base = (i0 << 40) | (i1 << 20)
+            first.append(base | min(max(lo2, 0), lim))
+            last.append(base | min(max(hi2, 0), lim))
+
+        if cov is None:
+            w0, w1, w2 = (float(v) for v in half_width)
+            lo2, hi2 = math.floor((s2 - w2) / cell), math.floor((s2 + w2) / cell)
+            for i0 in range(math.floor((s0 - w0) / cell), math.floor((s0 + w0) / cell) + 1):
+                for i1 in range(math.floor((s1 - w1) / cell), math.floor((s1 + w1) / cell) + 1):
+                    add(i0, i1, lo2, hi2)
+        else:
+            (c00, c01, c02), (_, c11, c12), (_, _, c22) = cov
+            L = float(limit if limit is not None else 1.0)
+            b10 = c01 / c00                                   # E[r1 | r0] = b10 r0
+            v1 = max(c11 - c01 * b10, 0.0)
+            det = c00 * c11 - c01 * c01                       # E[r2 | r0, r1] = g0 r0 + g1 r1
+            g0, g1 = (c02 * c11 - c12 * c01) / det, (c12 * c00 - c02 * c01) / det
+            v2 = max(c22 - g0 * c02 - g1 * c12, 0.0)
+            h0, h1, h2 = math.sqrt(L * c00), math.sqrt(L * v1), math.sqrt(L * v2)
+            for i0 in range(math.floor((s0 - h0) / cell), math.floor((s0 + h0) / cell) + 1):
+                a0, b0 = max(i0 * cell - s0, -h0), min((i0 + 1) * cell - s0, h0)
+                m_lo, m_hi = min(b10 * a0, b10 * b0) - h1, max(b10 * a0, b10 * b0) + h1
+                for i1 in range(math.floor((s1 + m_lo) / cell), math.floor((s1 + m_hi) / cell) + 1):
+                    a1, b1 = max(i1 * cell - s1, m_lo), min((i1 + 1) * cell - s1, m_hi)
+                    corners = (g0 * a0 + g1 * a1, g0 * a0 + g1 * b1, g0 * b0 + g1 * a1, g0 * b0 + g1 * b1)
+                    add(i0, i1, math.floor((s2 + min(corners) - h2) / cell),
+                        math.floor((s2 + max(corners) + h2) / cell))
+        keys = self.keys
+        a = np.searchsorted(keys, first, "left")
+        b = np.searchsorted(keys, last, "right")
+        if len(first) == 1:
+            idx: slice | np.ndarray = slice(int(a[0]), int(b[0]))
+        else:
+            counts = b - a
+            total = int(counts.sum())
+            idx = np.repeat(a - np.cumsum(counts) + counts, counts) + np.arange(total)
+        if isinstance(idx, slice):
+            got, verts = self.entry_sides[idx], self.entry_verts[idx]
+        else:  # np.take: several times faster than fancy indexing here
+            got, verts = np.take(self.entry_sides, idx, axis=0), np.take(self.entry_verts, idx, axis=0)
+        if cov is None:
+            keep = ((np.abs(got[:, 0] - s0) <= w0) & (np.abs(got[:, 1] - s1) <= w1)
+                    & (np.abs(got[:, 2] - s2) <= w2))
+            verts, got = verts[keep], got[keep]
+        return verts, got
 
 
 def _holdable_triangles(xy: np.ndarray, reach: float) -> np.ndarray:
@@ -635,6 +734,8 @@ class Localizer:
         self._var_a, self._var_m = self.noise.sigma_angle ** 2, self.noise.sigma_map ** 2
         self._limit = self.noise.chi2_limit
         self._z = math.sqrt(self._limit)
+        # the side screen's first-order chi-square may differ a little from the exact fit's
+        self._screen_limit = 1.5 * self._limit + 2.0
         self._xs, self._ys = holes.xy[:, 0].tolist(), holes.xy[:, 1].tolist()
         self._ids = [(int(a), int(b)) for a, b in holes.ids.tolist()]
 
@@ -730,26 +831,113 @@ class Localizer:
         return AmbiguousFixError(
             f"{len(passed)} hole triples on map '{self.holes.name}' fit the hands ({what}): {listing}{more}", passed)
 
-    def _side_widths(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
-                     order: Sequence[int]) -> np.ndarray:
-        """Half-widths of the index query per side: the gate's z times the side's own sigma."""
-        if self.noise.tolerance is not None:
-            return np.full(3, self.noise.tolerance)
-        out = []
+    def _sides(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+               order: Sequence[int]) -> tuple[list[float], list[float], list[list[float]] | None]:
+        """``(sides, S, S^-1)``: the hand triangle's sides taken in ``order``, their covariance
+        and its inverse (None with a fixed tolerance).
+
+        ``S`` is the side covariance (nested lists); with a tolerance, ``[tol] * 3`` half-widths.
+
+        Side lengths are what a rigid fit tests: a pose does not change them, and to first
+        order the fit's chi-square equals the Mahalanobis distance of the side residuals under
+        their covariance, propagated from the hands' (each side ``|h_i - h_j|`` moves with
+        ``u . (dh_i - dh_j)``; two sides sharing a hand are correlated through it). That gives
+        a vectorised screen over every indexed triple before any fit.
+        """
+        sides, us = [], []
         for k in range(3):
             i, j = order[k], order[(k + 1) % 3]
             dx, dy = hx[i] - hx[j], hy[i] - hy[j]
-            d = math.hypot(dx, dy) or 1.0
-            ux, uy = dx / d, dy / d
-            var = 0.0
-            for a, b, c in (cov[i], cov[j]):
-                var += a * ux * ux + 2 * b * ux * uy + c * uy * uy
-            out.append(1.05 * self._z * math.sqrt(var))
-        return np.array(out)
+            d = math.hypot(dx, dy)
+            sides.append(d)
+            us.append((dx / d, dy / d) if d > 0 else (1.0, 0.0))
+        if self.noise.tolerance is not None:
+            return sides, [self.noise.tolerance] * 3, None
+        ends = [((order[k], 1.0), (order[(k + 1) % 3], -1.0)) for k in range(3)]
+        S = [[0.0] * 3 for _ in range(3)]
+        for k in range(3):
+            ukx, uky = us[k]
+            for m in range(k, 3):
+                umx, umy = us[m]
+                v = 0.0
+                for hk, sk in ends[k]:
+                    for hm, sm in ends[m]:
+                        if hk == hm:
+                            a, b, c = cov[hk]
+                            v += sk * sm * (ukx * (a * umx + b * umy) + uky * (b * umx + c * umy))
+                S[k][m] = S[m][k] = v
+        return sides, S, _inv3(S)
+
+    def _screen(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                limit: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Triples of the measured oriented shape that pass the side screen (first-order
+        chi-square <= ``limit``, default 1.5 x the gate + 2).
+
+        Returns their vertices ``(K, 3)`` (map rows, arm order) sorted by the first-order
+        chi-square ``(K,)`` (zeros with a fixed tolerance), and the best triple the screen
+        rejected (or None) so a failed fix can still name its closest candidate.
+        """
+        cross = (hx[1] - hx[0]) * (hy[2] - hy[0]) - (hy[1] - hy[0]) * (hx[2] - hx[0])
+        screen = self._screen_limit if limit is None else limit
+        found_v, found_c, spare, spare_c = [], [], None, math.inf
+        # Both vertex orders have the same three sides, so one order's widths decide which
+        # orientations the noise admits; |cross| this small: orientation within the noise.
+        ccw = self._sides(hx, hy, cov, (0, 1, 2))
+        sides, S, sinv = ccw
+        width = max(S) if sinv is None else math.sqrt(screen * max(S[0][0], S[1][1], S[2][2]))
+        slack = 2 * width * max(sides)
+        orders = [o for o, ok in (((0, 1, 2), cross >= -slack), ((0, 2, 1), cross <= slack)) if ok]
+        for order in orders:
+            sides, S, sinv = ccw if order == (0, 1, 2) else self._sides(hx, hy, cov, order)
+            if sinv is None:
+                verts, got = self.index.query(sides, S)
+            else:
+                verts, got = self.index.query(sides, None, S, screen)
+            if not len(verts):
+                continue
+            if order != (0, 1, 2):
+                verts = verts[:, (0, 2, 1)]  # query order (arm 1, 3, 2) back to arm order
+            if sinv is None:
+                c1 = np.zeros(len(verts))
+            else:
+                r = got - sides
+                c1 = ((r @ np.array(sinv)) * r).sum(axis=1)
+                keep = c1 <= screen
+                if not keep.all():
+                    if not keep.any():
+                        j = int(np.argmin(c1))
+                        if c1[j] < spare_c:
+                            spare, spare_c = verts[j], float(c1[j])
+                    verts, c1 = verts[keep], c1[keep]
+            found_v.append(verts)
+            found_c.append(c1)
+        if not found_v:
+            return np.empty((0, 3), np.int64), np.empty(0), spare
+        verts, c1 = (found_v[0], found_c[0]) if len(found_v) == 1 else (np.concatenate(found_v),
+                                                                          np.concatenate(found_c))
+        if len(found_v) > 1:
+            verts, first = np.unique(verts, axis=0, return_index=True)
+            c1 = c1[first]
+        o = np.argsort(c1, kind="stable")
+        return verts[o], c1[o], spare
+
+    def _fit_rows(self, verts: np.ndarray, hx: list[float], hy: list[float],
+                  w: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Exact rigid fits of many triples: ``pose (K, 3)``, ``chi2 (K,)``, ``residual_cm (K, 3)``."""
+        if len(verts) <= 16:  # a few candidates: the scalar fit beats numpy's per-call overhead
+            xs, ys = self._xs, self._ys
+            fits = [_fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w)
+                    for v in verts.tolist()]
+            if not fits:
+                return np.empty((0, 3)), np.empty(0), np.empty((0, 3))
+            return np.array([f[:3] for f in fits]), np.array([f[3] for f in fits]), np.array([f[4] for f in fits])
+        h = np.array([hx, hy]).T
+        return _fit(self.holes.xy[verts], h, np.array([[[a, b], [b, c]] for a, b, c in w]))
 
     # -------------------------------------------------------------- public API
     def search(self, q: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Every hole triple of the measured oriented shape, vectorised, best first.
+        """Every hole triple of the measured oriented shape that the side screen lets through
+        (first-order chi-square within 1.5 x the gate + 2), fitted exactly, best first.
 
         Returns ``verts (K, 3)`` (map rows, arm order), ``pose (K, 3)``, ``chi2 (K,)``,
         ``residual_cm (K, 3)``.
@@ -759,35 +947,8 @@ class Localizer:
 
     def _search(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
                 w: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        cross = (hx[1] - hx[0]) * (hy[2] - hy[0]) - (hy[1] - hy[0]) * (hx[2] - hx[0])
-        sides = [math.hypot(hx[i] - hx[(i + 1) % 3], hy[i] - hy[(i + 1) % 3]) for i in range(3)]
-        wmax = float(np.max(self._side_widths(hx, hy, cov, (0, 1, 2))))
-        slack = 2 * wmax * max(sides)  # |cross| this small: orientation within the noise
-        found = []
-        for order in ((0, 1, 2), (0, 2, 1)):
-            if (order == (0, 1, 2) and cross < -slack) or (order == (0, 2, 1) and cross > slack):
-                continue
-            qs = [math.hypot(hx[order[k]] - hx[order[(k + 1) % 3]], hy[order[k]] - hy[order[(k + 1) % 3]])
-                  for k in range(3)]
-            verts = self.index.query(qs, self._side_widths(hx, hy, cov, order))
-            if len(verts):
-                found.append(verts[:, np.argsort(order)])
-        if not found:
-            z = np.empty((0, 3))
-            return np.empty((0, 3), np.int64), z, np.empty(0), z
-        verts = np.concatenate(found)
-        if len(found) > 1:
-            verts = np.unique(verts, axis=0)
-        if len(verts) <= 16:  # a few candidates: the scalar fit beats numpy's per-call overhead
-            xs, ys = self._xs, self._ys
-            fits = [_fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w)
-                    for v in verts.tolist()]
-            pose = np.array([f[:3] for f in fits])
-            chi2 = np.array([f[3] for f in fits])
-            res = np.array([f[4] for f in fits])
-        else:
-            h = np.array([hx, hy]).T
-            pose, chi2, res = _fit(self.holes.xy[verts], h, np.array([[[a, b], [b, c]] for a, b, c in w]))
+        verts, _, _ = self._screen(hx, hy, cov)
+        pose, chi2, res = self._fit_rows(verts, hx, hy, w)
         order = np.argsort(chi2, kind="stable")
         return verts[order], pose[order], chi2[order], res[order]
 
@@ -800,31 +961,105 @@ class Localizer:
     def localize(self, q: object) -> Fix:
         """Global fix from one grip: which hole each arm holds and the body pose.
 
+        The side screen orders the indexed triples by their first-order chi-square; exact
+        fits follow in that order and stop as soon as two pass the gate (then the grip is
+        ambiguous, whatever the rest hold). A first pass looks only where the sides match
+        closely, so on a wall of 40,000 holes - where one grip fits hundreds of triples - the
+        verdict costs a small query and two fits.
+
         Raises:
             NoFixError: no triple passes the gate (carries the best candidate).
-            AmbiguousFixError: several pass (carries them with their likelihoods).
+            AmbiguousFixError: several pass (carries them with their likelihoods; the full list,
+                its ``count`` and the message are worked out on first use).
         """
         hx, hy, cov, w = self._measure(q)
+        if self.noise.tolerance is not None:  # the seed's way: every triple within the tolerance
+            verts, pose, chi2, res = self._search(hx, hy, cov, w)
+            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(len(verts))]
+            return self._decide(cands, hx, hy, cov, "global search")
+        # Phase 0, for dense regular walls: the one index cell holding the measured sides;
+        # two exact passes there settle "ambiguous" without any wider query.
+        if (verdict := self._probe_cell(hx, hy, cov, w)) is not None:
+            raise verdict
+        # Phase 1: look only where the sides match closely, the screen widening step by step
+        # (its volume grows as limit^1.5), so a wall where thousands of triples fit at 1 deg
+        # still answers from a query of a few hundred.
+        for screen in (0.25, 1.0, 4.0):
+            verts, _, _ = self._screen(hx, hy, cov, min(screen, self._limit))
+            if len(verts) >= 2:
+                passed, _ = self._fit_until_two(verts[:8].tolist(), hx, hy, w)
+                if len(passed) == 2:
+                    raise self._lazy_ambiguity(hx, hy, cov, w, [c.holes for c in passed])
+        # Phase 2: the whole screen, fitted in order of the first-order chi-square.
+        verts, _, spare = self._screen(hx, hy, cov)
+        rows: Iterable[list[int]] = verts[:8].tolist()  # rarely more are needed: two passes end it
+        if len(verts) > 8:
+            rows = itertools.chain(rows, (v for v in verts[8:].tolist()))
+        if spare is not None:
+            rows = itertools.chain(rows, [spare.tolist()])
+        passed, others = self._fit_until_two(rows, hx, hy, w)
+        if len(passed) == 2:
+            raise self._lazy_ambiguity(hx, hy, cov, w, [c.holes for c in passed])
+        cands = sorted(passed + others, key=lambda c: c.chi2)
+        return self._decide(cands, hx, hy, cov, "global search", n_examined=len(verts))
+
+    def _probe_cell(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                    w: list[tuple[float, float, float]]) -> AmbiguousFixError | None:
+        """An ambiguity verdict from the single cell of the measured sides, or None."""
+        cross = (hx[1] - hx[0]) * (hy[2] - hy[0]) - (hy[1] - hy[0]) * (hx[2] - hx[0])
+        order = (0, 1, 2) if cross > 0 else (0, 2, 1)
+        sides, S, sinv = self._sides(hx, hy, cov, order)
+        verts, got = self.index.cell_of(sides)
+        if len(verts) < 2:
+            return None
+        r = got - sides
+        c1 = ((r @ np.array(sinv)) * r).sum(axis=1)
+        best = np.argpartition(c1, 7)[:8] if len(c1) > 8 else np.arange(len(c1))  # O(K), not a sort
+        best = best[np.argsort(c1[best], kind="stable")]
+        rows = verts[best[c1[best] <= self._limit]]
+        if order != (0, 1, 2):
+            rows = rows[:, (0, 2, 1)]
+        xs, ys, proof = self._xs, self._ys, []
+        for v in rows.tolist():  # the Kabsch pose's chi-square bounds the optimum's from above
+            if _fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w, 0)[3] <= self._limit:
+                proof.append(v)
+                if len(proof) == 2:
+                    return self._lazy_ambiguity(hx, hy, cov, w, proof)
+        return None
+
+    def _lazy_ambiguity(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                        w: list[tuple[float, float, float]], proof: Sequence[Sequence[int]]) -> AmbiguousFixError:
+        """An ambiguity proven by two passing triples; the full list is worked out on first use."""
+        return AmbiguousFixError(resolve=lambda: self._all_passing(hx, hy, cov, w, "global search", proof))
+
+    def _fit_until_two(self, rows: Iterable[list[int]], hx: list[float], hy: list[float],
+                       w: list[tuple[float, float, float]]) -> tuple[list[Candidate], list[Candidate]]:
+        """Fit triples in order until two pass the gate: ``(passed, failed)``."""
+        xs, ys, limit = self._xs, self._ys, self._limit
+        passed, others = [], []
+        for v in rows:
+            x, y, th, chi2, res = _fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w)
+            cand = self._candidate(v, x, y, th, chi2, res)
+            if chi2 <= limit:
+                passed.append(cand)
+                if len(passed) == 2:
+                    break
+            else:
+                others.append(cand)
+        return passed, others
+
+    def _all_passing(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
+                     w: list[tuple[float, float, float]], what: str,
+                     proof: Sequence[Sequence[int]] = ()) -> AmbiguousFixError:
+        """The full ambiguity report: every triple passing the exact gate, with likelihoods
+        (``proof``: triples already shown to pass, kept even if the side screen missed them)."""
         verts, pose, chi2, res = self._search(hx, hy, cov, w)
-        k = len(chi2)
-        if self.noise.tolerance is not None:
-            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(k)]
-            return self._decide(cands, hx, hy, cov, "global search", n_examined=k)
-        n_pass = int(np.searchsorted(chi2, self._limit, "right"))
-        if n_pass <= 1:
-            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(min(k, 2))]
-            return self._decide(cands, hx, hy, cov, "global search", n_examined=k)
-        lik = np.exp(-0.5 * (chi2[:n_pass] - chi2[0]))
-        lik /= lik.sum()
-
-        def build() -> list[Candidate]:
-            return [self._candidate(verts[i], *pose[i], chi2[i], res[i], lik[i]) for i in range(n_pass)]
-
-        ids = self._ids
-        listing = ", ".join(f"{tuple(ids[v] for v in verts[i])} (p={lik[i]:.3g})" for i in range(min(5, n_pass)))
-        more = f" and {n_pass - 5} more" if n_pass > 5 else ""
-        raise AmbiguousFixError(f"{n_pass} hole triples on map '{self.holes.name}' fit the hands (global search): "
-                                f"{listing}{more}", count=n_pass, build=build)
+        n = int(np.searchsorted(chi2, self._limit, "right"))
+        cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(n)]
+        seen = {c.holes for c in cands}
+        extra = [list(v) for v in proof if tuple(v) not in seen]
+        cands += [c for c in self._evaluate(extra, hx, hy, w) if c.chi2 <= self._limit]
+        return self._ambiguous(cands, what)
 
     def predict_moved_hand(self, holes: Sequence[int], hx: list[float], hy: list[float],
                            moved: int) -> tuple[float, float]:
