@@ -1,0 +1,711 @@
+"""Tic-tac-toe players for (m, n, k) games: the seed thesis's 3-ply player, a solver that
+never loses, and a random player - plus matches between them.
+
+Players share one small interface (:class:`Player`): ``choose(board) -> cell``. Every
+player that has choices to break takes a ``seed`` and draws from its own
+``random.Random``, so a match between seeded players replays move for move.
+
+* :class:`ThesisPlayer` - seed 003's algorithm, kept as the baseline it is: minimax three
+  plies deep (its move, the opponent's, its move) with the static evaluation "lines still
+  open for me minus lines still open for the opponent" and +-infinity for a win found on
+  the way. Alpha-beta inside the tree does not change its choice; ties between equally
+  scored moves are broken at random (the thesis took the first in scan order).
+* :class:`StrongPlayer` - an exact solver. :class:`Solver` is a negamax over the game
+  values win / draw / loss with alpha-beta, a transposition table keyed on the board
+  reduced by its symmetries (8 on a square board), immediate-win and forced-block
+  detection, cut-offs from lines that are dead for one side, and move ordering by line
+  potential. The player consults an opening book (:mod:`agents.book`: exact values of
+  every position with few stones, computed by this solver) where search alone is too slow,
+  solves exactly under a time budget after that, and falls back to an iterative-deepening
+  heuristic search only if the budget runs out first (reported as ``exact=False``).
+  Among the moves of the best value it samples by line potential (a softmax, seeded), so
+  it plays sharply against weak players and still varies its games.
+* :class:`RandomPlayer` - uniform over the legal moves.
+
+Values are from the point of view of the side to move: ``+1`` it can force a win, ``0``
+draw with best play on both sides, ``-1`` it loses against best play.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Protocol
+
+from envs.game import CLASSIC, EMPTY, THESIS, Board, Game, GameError, O, X
+
+__all__ = [
+    "Player",
+    "RandomPlayer",
+    "ThesisPlayer",
+    "StrongPlayer",
+    "Solver",
+    "Analysis",
+    "SearchTimeout",
+    "GameRecord",
+    "MatchResult",
+    "PLAYERS",
+    "make_player",
+    "play_game",
+    "play_match",
+    "GAMES",
+    "canonical_key",
+    "tables",
+    "potential",
+]
+
+WIN, DRAW, LOSS = 1, 0, -1
+#: Line-potential weights by the number of own stones in a line still open for its owner.
+_POTENTIAL = (1, 4, 16, 64, 256, 1024, 4096, 16384, 65536)
+
+
+class SearchTimeout(RuntimeError):
+    """The exact search ran past its deadline (raised inside :class:`Solver`)."""
+
+
+class Player(Protocol):
+    """Anything that picks a move: ``choose(board)`` returns a legal cell index."""
+
+    name: str
+
+    def choose(self, board: Board) -> int: ...
+
+
+# ------------------------------------------------------------------ per-game tables
+@dataclass(frozen=True)
+class _Tables:
+    """Precomputed masks of one game: lines, their cells, symmetries, move bits."""
+
+    game: Game
+    lines: tuple[tuple[int, tuple[int, ...]], ...]
+    lines_through: tuple[tuple[int, ...], ...]
+    line_ids_through: tuple[int, ...]  # per cell: bitmask over line indices
+    perms: tuple[tuple[int, ...], ...]  # symmetry s maps cell c to perms[s][c]
+    move_bits: tuple[tuple[int, ...], ...]  # move_bits[c][s] = 1 << perms[s][c]
+    centrality: tuple[int, ...]  # static tie-break: number of lines through the cell
+
+    def encode(self, mask: int) -> list[int]:
+        """``mask`` under every symmetry (the running keys of the solver)."""
+        out = []
+        for p in self.perms:
+            v = 0
+            m = mask
+            while m:
+                b = m & -m
+                v |= 1 << p[b.bit_length() - 1]
+                m ^= b
+            out.append(v)
+        return out
+
+
+def _symmetries(rows: int, cols: int) -> list[tuple[int, ...]]:
+    maps: list[Callable[[int, int], tuple[int, int]]] = [
+        lambda r, c: (r, c),
+        lambda r, c: (r, cols - 1 - c),
+        lambda r, c: (rows - 1 - r, c),
+        lambda r, c: (rows - 1 - r, cols - 1 - c),
+    ]
+    if rows == cols:
+        maps += [
+            lambda r, c: (c, r),
+            lambda r, c: (cols - 1 - c, r),
+            lambda r, c: (c, rows - 1 - r),
+            lambda r, c: (cols - 1 - c, rows - 1 - r),
+        ]
+    perms = []
+    for f in maps:
+        perm = []
+        for i in range(rows * cols):
+            r, c = f(*divmod(i, cols))
+            perm.append(r * cols + c)
+        perms.append(tuple(perm))
+    return perms
+
+
+@lru_cache(maxsize=16)
+def tables(game: Game) -> _Tables:
+    """The (cached) precomputed tables of ``game``."""
+    n = game.n_cells
+    lines = tuple((m, tuple(c for c in range(n) if m >> c & 1)) for m in game.lines)
+    ids = [0] * n
+    for i, (_, cells) in enumerate(lines):
+        for c in cells:
+            ids[c] |= 1 << i
+    perms = _symmetries(game.rows, game.cols)
+    move_bits = tuple(tuple(1 << p[c] for p in perms) for c in range(n))
+    return _Tables(game, lines, game.lines_through, tuple(ids), tuple(perms), move_bits,
+                   tuple(len(t) for t in game.lines_through))
+
+
+def canonical_key(board: Board) -> int:
+    """The board's key reduced by its symmetries: ``min_s (mover_s << 64 | other_s)``.
+
+    Equal for every rotation / reflection of a position; the mover's stones come first,
+    so the key also says whose turn it is.
+    """
+    t = tables(board.game)
+    me, op = _sides(board)
+    return min((a << 64) | b for a, b in zip(t.encode(me), t.encode(op)))
+
+
+def _sides(board: Board) -> tuple[int, int]:
+    """``(stones of the side to move, stones of the other side)``."""
+    return (board.x, board.o) if board.to_move == X else (board.o, board.x)
+
+
+# ------------------------------------------------------------------ exact solver
+class Solver:
+    """Exact negamax over win / draw / loss for one game, with a symmetric transposition table.
+
+    The table survives between calls (positions of one game share most of their trees), and
+    is cleared when it holds more than ``max_entries`` positions (about 100 bytes each).
+    ``nodes`` counts the positions visited since construction.
+    """
+
+    def __init__(self, game: Game, max_entries: int = 2_000_000) -> None:
+        self.game = game
+        self.t = tables(game)
+        self.max_entries = int(max_entries)
+        # key -> (lo + 1) * 3 + (hi + 1) + 9 * (best move in the key's frame + 1, or 0)
+        self.table: dict[int, int] = {}
+        self.nodes = 0
+        self._deadline = math.inf
+        self._w = _POTENTIAL[: game.k + 1]
+        # hot-path constants as plain attributes
+        self._full, self._n, self._need = game.full, game.n_cells, game.k - 1
+        self._lines, self._move_bits = self.t.lines, self.t.move_bits
+        self._masks = tuple(m for m, _ in self.t.lines)
+        self._cells = tuple(range(game.n_cells))
+        self._perms = self.t.perms
+        self._inverse = tuple(tuple(sorted(range(game.n_cells), key=p.__getitem__)) for p in self.t.perms)
+
+    # -- public ------------------------------------------------------------------
+    def value(self, board: Board, deadline: float | None = None) -> int:
+        """Exact value of ``board`` for the side to move (raises :class:`SearchTimeout`)."""
+        return self.bounded(board, LOSS, WIN, deadline)
+
+    def bounded(self, board: Board, alpha: int, beta: int, deadline: float | None = None) -> int:
+        """Fail-soft alpha-beta value: exact inside ``(alpha, beta)``, a bound outside."""
+        if board.winner != EMPTY:  # the side to move has lost already
+            return LOSS
+        if board.is_full:
+            return DRAW
+        if len(self.table) > self.max_entries:
+            self.table.clear()
+        self._deadline = math.inf if deadline is None else deadline
+        me, op = _sides(board)
+        return self._negamax(me, op, self.t.encode(me), self.t.encode(op), alpha, beta)
+
+    def child_value(self, board: Board, cell: int, deadline: float | None = None) -> int:
+        """Exact value of playing ``cell`` in ``board``, for the side playing it."""
+        return -self.value(board.play(cell), deadline)
+
+    # -- search ------------------------------------------------------------------
+    def _negamax(self, me: int, op: int, emes: list[int], eops: list[int], alpha: int, beta: int) -> int:
+        self.nodes += 1
+        if not self.nodes & 1023 and time.perf_counter() > self._deadline:
+            raise SearchTimeout("exact search ran past its deadline")
+        occ = me | op
+        if occ == self._full:
+            return DRAW
+        need = self._need
+        mywin = opwin = 0
+        mylive = oplive = False
+        for line in self._masks:
+            a, b = line & me, line & op
+            if b:
+                if a:
+                    continue
+                oplive = True
+                if b.bit_count() == need:
+                    opwin |= line ^ b
+            else:
+                mylive = True
+                if a.bit_count() == need:
+                    mywin |= line ^ a
+                if not a:
+                    oplive = True
+        if mywin:
+            return WIN
+        # a side with no open line cannot win: that bounds the value before any search
+        lo = LOSS if oplive else DRAW
+        hi = WIN if mylive else DRAW
+        if lo == hi or lo >= beta or hi <= alpha:
+            return lo if lo >= beta or lo == hi else hi
+        keys = [(a << 64) | b for a, b in zip(emes, eops)]
+        key = min(keys)
+        table = self.table
+        code = table.get(key)
+        tt_move = -1
+        if code is not None:
+            tlo, thi = code % 9 // 3 - 1, code % 3 - 1
+            if tlo > lo:
+                lo = tlo
+            if thi < hi:
+                hi = thi
+            if lo == hi or lo >= beta or hi <= alpha:
+                return lo if lo >= beta or lo == hi else hi
+            if code >= 9:  # best move found last time, stored in the canonical frame
+                tt_move = self._inverse[keys.index(key)][code // 9 - 1]
+        if lo > alpha:
+            alpha = lo
+        if hi < beta:
+            beta = hi
+        a0, b0 = alpha, beta
+        mb = self._move_bits
+        best, best_move = LOSS - 1, -1
+        if opwin:
+            if opwin & (opwin - 1):  # two cells to block: lost
+                table[key] = 0
+                return LOSS
+            moves: Sequence[int] = (opwin.bit_length() - 1,)
+        elif tt_move >= 0:
+            # try last time's best move before paying for move ordering: often it cuts
+            c = best_move = tt_move
+            best = -self._negamax(op, me | 1 << c, eops, [e | b for e, b in zip(emes, mb[c])], -beta, -alpha)
+            if best > alpha:
+                alpha = best
+            moves = () if alpha >= beta else [m for m in self._ordered(me, op, occ) if m != tt_move]
+        else:
+            moves = self._ordered(me, op, occ)
+            if not moves:
+                return DRAW
+        for c in moves:
+            v = -self._negamax(op, me | 1 << c, eops, [e | b for e, b in zip(emes, mb[c])], -beta, -alpha)
+            if v > best:
+                best, best_move = v, c
+                if v > alpha:
+                    alpha = v
+                    if alpha >= beta:
+                        break
+        if best <= a0:
+            hi = best
+        elif best >= b0:
+            lo = best
+        else:
+            lo = hi = best
+        table[key] = (lo + 1) * 3 + hi + 1 + 9 * (self._perms[keys.index(key)][best_move] + 1)
+        return best
+
+    def _ordered(self, me: int, op: int, occ: int) -> list[int]:
+        """Empty cells on a line still open for someone, by line potential (best first)."""
+        w = self._w
+        score = [0] * self._n
+        for line, cells in self._lines:
+            a, b = line & me, line & op
+            if b:
+                if a:
+                    continue
+                v = w[b.bit_count()]
+            else:
+                v = w[a.bit_count()] + (0 if a else w[0])
+            for c in cells:
+                score[c] += v
+        moves = [c for c in self._cells if not occ >> c & 1 and score[c]]
+        moves.sort(key=score.__getitem__, reverse=True)
+        return moves
+
+
+def potential(t: _Tables, w: Sequence[int], me: int, op: int) -> list[int]:
+    """Per cell: sum over the lines through it that are open for a side of ``w[stones]``
+    of that side - how much a stone there makes or blocks (0 on dead cells)."""
+    score = [0] * t.game.n_cells
+    for line, cells in t.lines:
+        a, b = line & me, line & op
+        if a and b:
+            continue
+        v = 0 if b else w[a.bit_count()]
+        if not a:
+            v += w[b.bit_count()]
+        for c in cells:
+            score[c] += v
+    return score
+
+
+# ------------------------------------------------------------------ players
+@dataclass
+class Analysis:
+    """What :meth:`StrongPlayer.analyse` found: the value for the side to move, the moves
+    that achieve it (all of them when ``complete``), whether the value is proven
+    (``exact``), where it came from (``"book"``, ``"search"``, ``"heuristic"``), nodes
+    searched and seconds taken."""
+
+    value: int
+    best_moves: list[int]
+    exact: bool
+    source: str
+    nodes: int = 0
+    seconds: float = 0.0
+    complete: bool = True
+    move_values: dict[int, int] = field(default_factory=dict)
+
+
+class RandomPlayer:
+    """Uniformly random legal moves from a seeded generator."""
+
+    name = "random"
+
+    def __init__(self, seed: int | None = None) -> None:
+        self.rng = random.Random(seed)
+
+    def choose(self, board: Board) -> int:
+        moves = board.legal_moves()
+        if not moves:
+            raise GameError(f"no legal move: the game is over ({board.result()})")
+        return self.rng.choice(moves)
+
+
+class ThesisPlayer:
+    """Seed 003's player: 3-ply minimax, evaluation = open lines mine minus open lines theirs.
+
+    A win found at any of the three plies scores +-infinity (its own win at ply 1 or 3,
+    the opponent's at ply 2). Equal root scores are broken at random from ``seed``.
+    """
+
+    name = "thesis"
+
+    def __init__(self, seed: int | None = None, plies: int = 3) -> None:
+        if plies < 1:
+            raise ValueError(f"plies={plies}; expected >= 1")
+        self.rng = random.Random(seed)
+        self.plies = plies
+
+    def scores(self, board: Board) -> dict[int, float]:
+        """Minimax score of every legal move (from the mover's point of view)."""
+        if board.is_over:
+            raise GameError(f"no legal move: the game is over ({board.result()})")
+        t = tables(board.game)
+        me, op = _sides(board)
+        lines = board.game.lines
+        all_lines = (1 << len(lines)) - 1
+        touched_me = touched_op = 0
+        ids = t.line_ids_through
+        for c in range(board.game.n_cells):
+            if me >> c & 1:
+                touched_me |= ids[c]
+            elif op >> c & 1:
+                touched_op |= ids[c]
+        out = {}
+        for c in board.legal_moves():
+            out[c] = self._value(board.game, t, me | 1 << c, op, touched_me | ids[c], touched_op, c,
+                                 1, True, -math.inf, math.inf, all_lines)
+        return out
+
+    def _value(self, g: Game, t: _Tables, me: int, op: int, tme: int, top: int, last: int, ply: int,
+               my_move_made: bool, alpha: float, beta: float, all_lines: int) -> float:
+        """Score after ``ply`` moves; ``my_move_made``: the last stone was the thesis player's."""
+        mover = me if my_move_made else op
+        if any(line & mover == line for line in g.lines_through[last]):
+            return math.inf if my_move_made else -math.inf
+        occ = me | op
+        if ply == self.plies or occ == g.full:
+            # lines still open for me (no opponent stone) minus lines open for the opponent
+            return (all_lines & ~top).bit_count() - (all_lines & ~tme).bit_count()
+        ids = t.line_ids_through
+        maximise = not my_move_made  # the thesis player moves next
+        best = -math.inf if maximise else math.inf
+        for c in range(g.n_cells):
+            if occ >> c & 1:
+                continue
+            if maximise:
+                v = self._value(g, t, me | 1 << c, op, tme | ids[c], top, c, ply + 1, True, alpha, beta, all_lines)
+                if v > best:
+                    best = v
+                    alpha = max(alpha, v)
+            else:
+                v = self._value(g, t, me, op | 1 << c, tme, top | ids[c], c, ply + 1, False, alpha, beta, all_lines)
+                if v < best:
+                    best = v
+                    beta = min(beta, v)
+            if alpha >= beta:
+                break
+        return best
+
+    def choose(self, board: Board) -> int:
+        scores = self.scores(board)
+        top = max(scores.values())
+        return self.rng.choice([c for c, v in scores.items() if v == top])
+
+
+class StrongPlayer:
+    """A player that never loses a position that is not already lost.
+
+    Args:
+        seed: seeds the choice among the moves of the best value.
+        time_budget_s: seconds per move for the exact search; ``None`` = unbounded (always
+            exact). If the budget runs out, the rest of the move goes to an
+            iterative-deepening heuristic search over the moves not proven to lose.
+        book: use the opening book where one exists for the game.
+        temperature: softmax temperature over line potential when choosing among the moves
+            of the best value (0 = always the highest potential, ties at random).
+        solver: share a :class:`Solver` (its table) between players of one game.
+    """
+
+    name = "solver"
+
+    def __init__(self, seed: int | None = None, time_budget_s: float | None = 0.4, book: bool = True,
+                 temperature: float = 0.5, solver: Solver | None = None) -> None:
+        if time_budget_s is not None and not time_budget_s > 0:
+            raise ValueError(f"time_budget_s={time_budget_s!r}; expected a positive number of seconds or None")
+        if temperature < 0:
+            raise ValueError(f"temperature={temperature!r}; expected >= 0")
+        self.rng = random.Random(seed)
+        self.time_budget_s = time_budget_s
+        self.use_book = book
+        self.temperature = float(temperature)
+        self._solvers: dict[Game, Solver] = {}
+        if solver is not None:
+            self._solvers[solver.game] = solver
+        self.last: Analysis | None = None
+
+    def solver(self, game: Game) -> Solver:
+        if game not in self._solvers:
+            self._solvers[game] = Solver(game)
+        return self._solvers[game]
+
+    # -- choosing ------------------------------------------------------------------
+    def choose(self, board: Board) -> int:
+        a = self.analyse(board, all_best=False)
+        self.last = a
+        return a.best_moves[0]
+
+    def _sample_order(self, board: Board, moves: Sequence[int]) -> list[int]:
+        """``moves`` in a random order where higher line potential tends to come first: the
+        Gumbel-max trick, so that the first feasible move is a softmax sample."""
+        t = tables(board.game)
+        me, op = _sides(board)
+        score = potential(t, _POTENTIAL[: board.game.k + 1], me, op)
+        top = max((score[c] for c in moves), default=1) or 1
+        keyed = []
+        for c in moves:
+            logit = score[c] / top
+            if self.temperature > 0:
+                logit = logit / self.temperature - math.log(-math.log(self.rng.random() or 1e-300))
+            else:
+                logit += self.rng.random() * 1e-9
+            keyed.append((logit, c))
+        keyed.sort(reverse=True)
+        return [c for _, c in keyed]
+
+    def analyse(self, board: Board, all_best: bool = True) -> Analysis:
+        """Value of ``board`` for the side to move and the moves that keep it.
+
+        ``all_best=False`` (what :meth:`choose` uses) stops at the first best move in the
+        sampled order; ``best_moves[0]`` is then the chosen move.
+        """
+        if board.is_over:
+            raise GameError(f"no legal move: the game is over ({board.result()})")
+        t0 = time.perf_counter()
+        solver = self.solver(board.game)
+        n0 = solver.nodes
+        moves = board.legal_moves()
+        order = self._sample_order(board, moves)
+
+        def done(a: Analysis) -> Analysis:
+            a.seconds, a.nodes = time.perf_counter() - t0, solver.nodes - n0
+            return a
+
+        # immediate wins and forced blocks need no search
+        me, op = _sides(board)
+        wins = [c for c in order if _completes(board.game, me, c)]
+        if wins:
+            return done(Analysis(WIN, wins if all_best else wins[:1], True, "search", complete=all_best))
+        if self.use_book:
+            from agents import book as _book
+
+            vals = _book.child_values(board)
+            if vals is not None:
+                best = max(vals.values())
+                bm = [c for c in order if vals[c] == best]
+                return done(Analysis(best, bm, True, "book", move_values=vals))
+        deadline = None if self.time_budget_s is None else t0 + self.time_budget_s
+        try:
+            root = solver.value(board, deadline)
+            best_moves, values = [], {}
+            for c in order:
+                v = -solver.bounded(board.play(c), -root, -root + 1, deadline)  # is this move >= root?
+                if v >= root:
+                    best_moves.append(c)
+                    values[c] = root
+                    if not all_best:
+                        break
+                else:
+                    values[c] = v  # an upper bound below root
+            return done(Analysis(root, best_moves, True, "search", complete=all_best, move_values=values))
+        except SearchTimeout:
+            move = self._fallback(board, order, solver, t0)
+            return done(Analysis(DRAW, [move], False, "heuristic", complete=False))
+
+    def _fallback(self, board: Board, order: list[int], solver: Solver, t0: float) -> int:
+        """Out of time: drop moves the table already proves losing, then deepen a heuristic
+        alpha-beta search over the rest for a quarter of the budget more."""
+        keep = []
+        for c in order:
+            code = solver.table.get(canonical_key(board.play(c)))
+            if code is None or code % 9 // 3 - 1 < WIN:  # not proven a win for the opponent
+                keep.append(c)
+        keep = keep or order
+        budget = self.time_budget_s or 0.1
+        search = _HeuristicSearch(board.game, time.perf_counter() + 0.25 * budget)
+        return search.best(board, keep)
+
+
+class _HeuristicSearch:
+    """Iterative-deepening alpha-beta with a line-potential evaluation (used only when the
+    exact search runs out of time)."""
+
+    BIG = 10**9
+
+    def __init__(self, game: Game, deadline: float) -> None:
+        self.t = tables(game)
+        self.game = game
+        self.deadline = deadline
+        self.w = _POTENTIAL[: game.k + 1]
+
+    def best(self, board: Board, moves: list[int]) -> int:
+        me, op = _sides(board)
+        choice = moves[0]
+        depth = 1
+        try:
+            while depth <= self.game.n_cells - board.n_stones:
+                scored = []
+                alpha = -self.BIG - 1
+                for c in moves:
+                    v = -self._search(op, me | 1 << c, c, depth - 1, -self.BIG - 1, -alpha)
+                    scored.append((v, c))
+                    alpha = max(alpha, v)
+                scored.sort(key=lambda vc: -vc[0])
+                moves = [c for _, c in scored]  # best first: better ordering next depth
+                choice = moves[0]
+                depth += 1
+        except SearchTimeout:
+            pass
+        return choice
+
+    def _search(self, me: int, op: int, last: int, depth: int, alpha: int, beta: int) -> int:
+        if time.perf_counter() > self.deadline:
+            raise SearchTimeout("heuristic search ran past its deadline")
+        g = self.game
+        if any(line & op == line for line in g.lines_through[last]):
+            return -self.BIG
+        occ = me | op
+        if occ == g.full:
+            return 0
+        if depth == 0:
+            s = 0
+            for line, _ in self.t.lines:
+                if not line & op:
+                    s += self.w[(line & me).bit_count()]
+                if not line & me:
+                    s -= self.w[(line & op).bit_count()]
+            return s
+        score = potential(self.t, self.w, me, op)
+        moves = sorted((c for c in range(g.n_cells) if not occ >> c & 1), key=score.__getitem__, reverse=True)
+        best = -self.BIG - 1
+        for c in moves:
+            v = -self._search(op, me | 1 << c, c, depth - 1, -beta, -alpha)
+            if v > best:
+                best = v
+                alpha = max(alpha, v)
+                if alpha >= beta:
+                    break
+        return best
+
+
+def _completes(game: Game, stones: int, cell: int) -> bool:
+    s = stones | 1 << cell
+    return any(line & s == line for line in game.lines_through[cell])
+
+
+# ------------------------------------------------------------------ matches
+PLAYERS: dict[str, Callable[[int | None], Player]] = {
+    "solver": lambda seed: StrongPlayer(seed=seed),
+    "thesis": lambda seed: ThesisPlayer(seed=seed),
+    "random": lambda seed: RandomPlayer(seed=seed),
+}
+
+
+def make_player(name: str, seed: int | None = None) -> Player:
+    """A player by name: ``"solver"`` (strong), ``"thesis"`` or ``"random"``."""
+    try:
+        return PLAYERS[name](seed)
+    except KeyError:
+        raise ValueError(f"player {name!r}; expected one of: {', '.join(PLAYERS)}") from None
+
+
+@dataclass
+class GameRecord:
+    """One finished game: the moves (cell indices), the final board, who won (``X``, ``O``
+    or ``EMPTY`` for a draw) and each move's thinking time in seconds."""
+
+    moves: list[int]
+    board: Board
+    winner: int
+    seconds: list[float]
+
+
+def play_game(game: Game, x: Player, o: Player, start: Board | None = None) -> GameRecord:
+    """Play ``x`` against ``o`` from ``start`` (default: the empty board) to the end."""
+    board = start if start is not None else game.empty()
+    moves, secs = [], []
+    while not board.is_over:
+        player = x if board.to_move == X else o
+        t0 = time.perf_counter()
+        cell = player.choose(board)
+        secs.append(time.perf_counter() - t0)
+        board = board.play(cell)
+        moves.append(cell)
+    return GameRecord(moves, board, board.winner, secs)
+
+
+@dataclass
+class MatchResult:
+    """Tally of a match: wins of X, wins of O, draws, and every move time per side (s)."""
+
+    x_name: str
+    o_name: str
+    x_wins: int = 0
+    o_wins: int = 0
+    draws: int = 0
+    x_seconds: list[float] = field(default_factory=list)
+    o_seconds: list[float] = field(default_factory=list)
+
+    @property
+    def games(self) -> int:
+        return self.x_wins + self.o_wins + self.draws
+
+
+def play_match(game: Game, x_name: str, o_name: str, games: int, seed: int = 0,
+               progress: Callable[[int], None] | None = None,
+               factory: Callable[[str, int], Player] = make_player) -> MatchResult:
+    """``games`` games of ``x_name`` (moving first) against ``o_name``; game ``i`` seeds the
+    players with ``seed * 1_000_003 + 2 i`` and ``... + 2 i + 1``, so a match replays.
+
+    Strong players keep their solver's table across the games of the match.
+    """
+    res = MatchResult(x_name, o_name)
+    px, po = factory(x_name, seed * 1_000_003), factory(o_name, seed * 1_000_003 + 1)
+    for i in range(games):
+        for p, s in ((px, 2 * i), (po, 2 * i + 1)):
+            if hasattr(p, "rng"):
+                p.rng.seed(seed * 1_000_003 + s)
+        rec = play_game(game, px, po)
+        for b_idx, secs in enumerate(rec.seconds):
+            (res.x_seconds if b_idx % 2 == 0 else res.o_seconds).append(secs)
+        if rec.winner == X:
+            res.x_wins += 1
+        elif rec.winner == O:
+            res.o_wins += 1
+        else:
+            res.draws += 1
+        if progress is not None:
+            progress(1)
+    return res
+
+
+#: The built-in games by name (``--board 5 --k 4`` at the CLI).
+GAMES = {"3x3x3": CLASSIC, "5x5x4": THESIS}
