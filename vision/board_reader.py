@@ -1,0 +1,784 @@
+"""Read a tic-tac-toe board from a camera image: find the grid, undo the perspective, and
+call every cell empty, X or O with a confidence. OpenCV + numpy only.
+
+Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
+
+1. **Ink map.** Luma darkness against the local background, ``1 - Y / background(Y)``,
+   with the background a morphological closing of a shrunk copy (removes strokes, keeps
+   light gradients, shadows and glare). Luma makes every pen colour dark and a yellow
+   highlighter nearly invisible; normalising by the background makes the map independent
+   of uneven light.
+2. **Grid.** Long straight segments (probabilistic Hough on the thresholded map) are
+   merged into lines, split into the two families of the grid by direction (perspective
+   lets each family fan out), and ordered across. The longest lines of each family are
+   the field's; a family's outermost line is a *frame* line when the other family stops
+   at it, an *interior* line when the other family runs on for about a cell - so an
+   interior-only field (the thesis's 4 + 4 lines), a full frame and a frame with sides
+   missing all work. The board size follows from the number of interior lines, or is
+   given.
+3. **Homography.** Every intersection of a column line with a row line is a point of the
+   ideal grid; a least-squares homography maps grid coordinates (cells) to pixels. Its
+   reprojection error and the count of grid points found are the grid's confidence.
+4. **Cells.** The ink map is warped onto a square grid of ``cell_px`` per cell, the grid
+   lines are masked out, and each cell's ink is measured: its amount (empty or not,
+   against a threshold set from the contrast of the grid lines themselves, so faint
+   ghosts of erased games fall below it), and two shape features that do not depend on
+   the symbol's rotation, size or placement in the cell - ink at the centre of the mark
+   (an X crosses there, an O is hollow) and an enclosed hole (an O encloses one, an X
+   does not). A logistic rule turns them into probabilities.
+
+Rows are returned top to bottom and columns left to right *as the image shows them*
+(a board turned more than 45 degrees reads turned). :class:`ThresholdReader` keeps seed
+003's rule as the baseline: the share of pixels darker than a grey level in fixed image
+regions, which says "filled" or "empty" and cannot tell X from O.
+
+No board in the image raises :class:`NoBoardError` (with the reason), never a guess.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+__all__ = [
+    "EMPTY",
+    "X",
+    "O",
+    "BoardReading",
+    "BoardReader",
+    "ThresholdReader",
+    "NoBoardError",
+    "VisionError",
+    "ink_map",
+    "cell_features",
+    "debug_image",
+]
+
+EMPTY, X, O = 0, 1, 2
+_SYMBOL = {EMPTY: ".", X: "X", O: "O"}
+
+
+class VisionError(ValueError):
+    """Bad input to the reader (not an image, wrong size argument, ...)."""
+
+
+class NoBoardError(VisionError):
+    """No tic-tac-toe grid could be found in the image; ``reason`` says what was missing."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(f"no board found: {reason}")
+        self.reason = reason
+
+
+@dataclass
+class BoardReading:
+    """What the reader saw.
+
+    Attributes:
+        cells: ``(n, n)`` int array, 0 empty, 1 X, 2 O; row 0 at the top of the image.
+        confidence: ``(n, n)`` probability of each call.
+        probs: ``(n, n, 3)`` probabilities of empty / X / O per cell.
+        homography: 3 x 3 taking grid coordinates (cells; (0, 0) the top-left corner of the
+            field, (n, n) the bottom-right) to image pixels.
+        grid_error_px: RMS distance of the found grid points from the fitted grid (px).
+        grid_points: how many line intersections the homography rests on.
+        frame: which border sides were drawn (left, right, top, bottom).
+    """
+
+    cells: np.ndarray
+    confidence: np.ndarray
+    probs: np.ndarray
+    homography: np.ndarray
+    grid_error_px: float
+    grid_points: int
+    frame: tuple[bool, bool, bool, bool] = (False, False, False, False)
+    features: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+    @property
+    def n(self) -> int:
+        return int(self.cells.shape[0])
+
+    def text(self) -> str:
+        """The board in the game's text form, e.g. ``"X..|.O.|..."``."""
+        return "|".join("".join(_SYMBOL[int(v)] for v in row) for row in self.cells)
+
+    def corners(self) -> np.ndarray:
+        """The field's corners in the image (px): top-left, top-right, bottom-right, bottom-left."""
+        n = self.n
+        return _apply(self.homography, np.array([[0, 0], [n, 0], [n, n], [0, n]], float))
+
+
+def _apply(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    p = np.concatenate([pts, np.ones((len(pts), 1))], axis=1) @ H.T
+    return p[:, :2] / p[:, 2:3]
+
+
+def _as_rgb(image: object) -> np.ndarray:
+    img = np.asarray(image)
+    if img.dtype != np.uint8 or img.ndim not in (2, 3) or (img.ndim == 3 and img.shape[2] not in (3, 4)):
+        raise VisionError(f"image of dtype {img.dtype} and shape {img.shape}; expected uint8 (H, W) or (H, W, 3)")
+    if min(img.shape[:2]) < 32:
+        raise VisionError(f"image of shape {img.shape} is too small; expected at least 32 x 32 pixels")
+    if img.ndim == 2:
+        return cv2.cvtColor(img, cv2.COLOR_GRAY2RGB)
+    return img[..., :3]
+
+
+def ink_map(image: object, stroke_px: float = 12.0) -> np.ndarray:
+    """Ink darkness ``(H, W)`` float32 in 0..1: luma darkness against the local background.
+
+    The background is a grey closing (max then min filter) over a square a little wider
+    than ``stroke_px``, the widest stroke expected: it removes thin dark strokes and keeps
+    anything wide - light gradients, shadows, glare, and the table around the paper, whose
+    edge therefore does not turn into a line of ink.
+    """
+    rgb = _as_rgb(image)
+    y = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    k = 2 * int(math.ceil(stroke_px)) + 1
+    # replicate the border first: a sliver of dark table along the image edge would
+    # otherwise look like a stroke
+    padded = cv2.copyMakeBorder(y, k, k, k, k, cv2.BORDER_REPLICATE)
+    bg = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)))[k:-k, k:-k]
+    d = 1.0 - y / np.maximum(bg, 8.0)
+    return np.clip(d, 0.0, 1.0)
+
+
+# ------------------------------------------------------------------ lines
+@dataclass
+class _Line:
+    theta: float  # normal direction (rad, 0..pi)
+    rho: float  # signed distance of the line from the origin along the normal (px)
+    length: float  # total length of the merged segments (px)
+    p0: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    p1: np.ndarray = field(default_factory=lambda: np.zeros(2))  # extent along the line
+
+    @property
+    def normal(self) -> np.ndarray:
+        return np.array([math.cos(self.theta), math.sin(self.theta)])
+
+    @property
+    def direction(self) -> np.ndarray:
+        return np.array([-math.sin(self.theta), math.cos(self.theta)])
+
+    def homog(self) -> np.ndarray:
+        c, s = math.cos(self.theta), math.sin(self.theta)
+        return np.array([c, s, -self.rho])
+
+
+def _segments(mask: np.ndarray, min_len: float) -> np.ndarray:
+    segs = cv2.HoughLinesP(mask, 1, np.pi / 180, threshold=max(10, int(min_len * 0.5)),
+                           minLineLength=int(min_len), maxLineGap=int(max(3, min_len * 0.12)))
+    return np.zeros((0, 4)) if segs is None else segs.reshape(-1, 4).astype(np.float64)
+
+
+def _fit_points(pts: np.ndarray, wts: np.ndarray, length: float) -> _Line:
+    """Total-least-squares line through weighted points, spanning their extent."""
+    c = (pts * wts[:, None]).sum(0) / wts.sum()
+    cov = ((pts - c) * wts[:, None]).T @ (pts - c)
+    _, evecs = np.linalg.eigh(cov)
+    nrm = evecs[:, 0]
+    th = math.atan2(nrm[1], nrm[0]) % np.pi
+    nrm = np.array([math.cos(th), math.sin(th)])
+    dirv = np.array([-nrm[1], nrm[0]])
+    t = (pts - c) @ dirv
+    return _Line(th, float(c @ nrm), length, c + t.min() * dirv, c + t.max() * dirv)
+
+
+def _merge(segs: np.ndarray, tol: float) -> list[_Line]:
+    """Merge collinear segments ``(K, 4)`` into lines, longest first: a segment joins a line
+    when both its ends lie within ``tol`` px of it (hand-drawn lines break into pieces
+    whose own angles scatter, but whose ends stay on the line)."""
+    if not len(segs):
+        return []
+    d = segs[:, 2:] - segs[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    groups: list[tuple[_Line, list[int]]] = []
+    for i in np.argsort(-length):
+        a, b = segs[i, :2], segs[i, 2:]
+        for g, (ln, members) in enumerate(groups):
+            if abs(a @ ln.normal - ln.rho) <= tol and abs(b @ ln.normal - ln.rho) <= tol:
+                members.append(int(i))
+                idx = np.array(members)
+                pts = np.concatenate([segs[idx, :2], segs[idx, 2:]])
+                groups[g] = (_fit_points(pts, np.tile(length[idx], 2), float(length[idx].sum())), members)
+                break
+        else:
+            groups.append((_fit_points(np.stack([a, b]), np.ones(2), float(length[i])), [int(i)]))
+    out = []
+    for ln, members in groups:  # length: the union of the pieces along the line, not their sum
+        iv = [tuple(sorted(((segs[i, :2] - ln.p0) @ ln.direction, (segs[i, 2:] - ln.p0) @ ln.direction)))
+              for i in members]
+        out.append(_Line(ln.theta, ln.rho, _union_length(iv), ln.p0, ln.p1))
+    return out
+
+
+def _union_length(intervals: Sequence[tuple[float, float]]) -> float:
+    """Total length covered by 1-D intervals ``(a, b)``, a <= b."""
+    iv = sorted(intervals)
+    cover, (lo, hi) = 0.0, iv[0]
+    for a, b in iv[1:]:
+        if a > hi:
+            cover, lo = cover + hi - lo, a
+        hi = max(hi, b)
+    return float(cover + hi - lo)
+
+
+def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
+    p = np.cross(a.homog(), b.homog())
+    if abs(p[2]) < 1e-9:
+        return None
+    return p[:2] / p[2]
+
+
+def _refit(ln: _Line, mask: np.ndarray, band: float) -> _Line | None:
+    """The line refitted (total least squares) to the full-resolution ink within ``band`` px
+    of it, between its ends; None if no ink is there."""
+    h, w = mask.shape
+    pad = band + 2
+    x0, x1 = int(max(0, min(ln.p0[0], ln.p1[0]) - pad)), int(min(w, max(ln.p0[0], ln.p1[0]) + pad + 1))
+    y0, y1 = int(max(0, min(ln.p0[1], ln.p1[1]) - pad)), int(min(h, max(ln.p0[1], ln.p1[1]) + pad + 1))
+    ys, xs = np.nonzero(mask[y0:y1, x0:x1])
+    if len(xs) < 10:
+        return None
+    pts = np.stack([xs + x0, ys + y0], -1).astype(np.float64)
+    dist = pts @ ln.normal - ln.rho
+    along = (pts - ln.p0) @ ln.direction
+    length = float(np.linalg.norm(ln.p1 - ln.p0))
+    sel = (np.abs(dist) <= band) & (along >= -pad) & (along <= length + pad)
+    if sel.sum() < 10:
+        return None
+    return _fit_points(pts[sel], np.ones(int(sel.sum())), ln.length)
+
+
+def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
+    """Split lines into the two grid directions: a length-weighted circular 2-means on the
+    doubled normal angle, seeded by the longest line."""
+    if len(lines) < 2:
+        return lines, []
+    ang = np.array([2 * ln.theta for ln in lines])
+    wts = np.array([ln.length for ln in lines])
+    c0 = ang[int(np.argmax(wts))]
+    c1 = c0 + np.pi
+    for _ in range(10):
+        d0 = np.abs(np.angle(np.exp(1j * (ang - c0))))
+        d1 = np.abs(np.angle(np.exp(1j * (ang - c1))))
+        lab = d1 < d0
+        if lab.all() or (~lab).all():
+            break
+        c0 = float(np.angle((wts[~lab] * np.exp(1j * ang[~lab])).sum()))
+        c1 = float(np.angle((wts[lab] * np.exp(1j * ang[lab])).sum()))
+    fa = [ln for ln, k in zip(lines, lab) if not k]
+    fb = [ln for ln, k in zip(lines, lab) if k]
+    return fa, fb
+
+
+# ------------------------------------------------------------------ cells
+_FEATURES = ("peak", "ink", "hollow", "hole", "extent")
+
+
+def cell_features(patch: np.ndarray, threshold: float, margin: int) -> np.ndarray:
+    """Features of one rectified cell: ``patch`` is the cell's darkness with ``margin`` px of
+    its neighbours around it (so a mark that crosses the cell's border stays whole) and its
+    grid lines already removed.
+
+    * ``peak``: 99th percentile of the darkness inside the cell (is there real ink at all?).
+    * ``ink``: the mark's ink area relative to the cell. The mark is the ink (darker than
+      ``threshold`` and than half the peak) in connected pieces of at least 1.5 % of the cell
+      whose centre lies inside the cell.
+    * ``hollow``: how empty the mark's middle is. The ink pixels are whitened by their own
+      second moments (an oval O becomes a ring, whatever its size, tilt or aspect), and this
+      is 1 minus the share of ink within 0.45 of the median whitened radius, scaled so that
+      ink spread evenly from the centre out (an X's strokes) gives 0 and a ring gives 1.
+    * ``hole``: area of the largest background region enclosed by the mark (after closing
+      small gaps), relative to the mark's bounding box (an O encloses one).
+    * ``extent``: the mark's bounding-box size relative to the cell.
+    """
+    size = patch.shape[0] - 2 * margin
+    inner = patch[margin:margin + size, margin:margin + size]
+    peak = float(np.percentile(inner, 99))
+    m = (patch > max(threshold, 0.5 * peak)).astype(np.uint8)
+    n_lab, lab, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8)
+    lo, hi = margin - 0.5, margin + size - 0.5
+    keep = np.zeros(n_lab, bool)
+    keep[1:] = ((stats[1:, cv2.CC_STAT_AREA] >= max(4, int(0.015 * size * size)))
+                & (cents[1:, 0] > lo) & (cents[1:, 0] < hi) & (cents[1:, 1] > lo) & (cents[1:, 1] < hi))
+    if not keep.any():
+        return np.array([peak, 0.0, 0.0, 0.0, 0.0])
+    m = keep[lab].astype(np.uint8)
+    ys, xs = np.nonzero(m)
+    ink = len(xs) / float(size * size)
+    x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
+    bw, bh = x1 - x0 + 1, y1 - y0 + 1
+    extent = max(bw, bh) / size
+    pts = np.stack([xs, ys], -1).astype(np.float64)
+    mu = pts.mean(axis=0)
+    c = pts - mu
+    cov = c.T @ c / len(c) + 1e-6 * np.eye(2)
+    evals, evecs = np.linalg.eigh(cov)
+    # the middle of the mark, in whitened units (an O's hole spans more than 0.4 of them)
+    yy, xx = np.mgrid[y0:y1 + 1, x0:x1 + 1]
+    z = (np.stack([xx - mu[0], yy - mu[1]], -1) @ evecs) / np.sqrt(evals)
+    middle = (z[..., 0] ** 2 + z[..., 1] ** 2) < 0.4 ** 2
+    fill = float(m[y0:y1 + 1, x0:x1 + 1][middle].mean()) if middle.any() else 0.0
+    hollow = float(np.clip(1.0 - fill, 0.0, 1.0))
+    # enclosed background: flood the outside of the (gap-closed) mark from the border
+    ck = max(3, int(round(0.08 * size)) | 1)
+    closed = cv2.morphologyEx(m, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ck, ck)))
+    flood = np.pad(closed, 1)
+    cv2.floodFill(flood, None, (0, 0), 2)
+    enclosed = (flood[1:-1, 1:-1] == 0).astype(np.uint8)
+    n_h, _, st_h, _ = cv2.connectedComponentsWithStats(enclosed, connectivity=4)
+    hole = float(st_h[1:, cv2.CC_STAT_AREA].max()) / float(bw * bh) if n_h > 1 else 0.0
+    return np.array([peak, ink, hollow, hole, extent])
+
+
+def _probabilities(f: np.ndarray, ref: float) -> np.ndarray:
+    """``(..., 5)`` features -> ``(..., 3)`` probabilities of empty / X / O.
+
+    A mark needs real ink - a peak at least 40 % as dark as the grid lines (``ref``), which
+    ghosts of erased marks and graph paper are not - and some size: ``p(mark)`` is the
+    product of two sigmoids. Given a mark, ``p(O) = sigmoid(b)``: a hollow middle and an
+    enclosed hole mean O; ink spread out from the centre and no hole mean X.
+    """
+    peak, ink, hollow, hole, extent = (f[..., i] for i in range(5))
+    a_dark = 25.0 * (peak / max(ref, 1e-3) - 0.4)
+    a_size = 60.0 * (ink - 0.015) + 12.0 * (extent - 0.25)
+    b = 12.0 * (hollow - 0.3) + 4.0 * (hole - 0.1)
+
+    def sig(v: np.ndarray) -> np.ndarray:
+        return 1.0 / (1.0 + np.exp(-np.clip(v, -50, 50)))
+
+    p_mark = sig(a_dark) * sig(a_size)
+    p_o = sig(b)
+    return np.stack([1 - p_mark, p_mark * (1 - p_o), p_mark * p_o], axis=-1)
+
+
+# ------------------------------------------------------------------ the reader
+class BoardReader:
+    """Finds the grid and reads every cell (see the module docstring).
+
+    Args:
+        size: 3 or 5 cells a side, or None to decide from the number of grid lines.
+        cell_px: side of a rectified cell (px) for the cell features.
+        max_side_px: larger images are shrunk to this longer side first (speed).
+    """
+
+    def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800) -> None:
+        if size not in (None, 3, 5):
+            raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
+        self.size = size
+        self.cell_px = int(cell_px)
+        self.max_side_px = int(max_side_px)
+
+    def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
+        """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
+
+        ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
+        in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
+        :func:`debug_image`.
+        """
+        rgb = _as_rgb(image)
+        h0, w0 = rgb.shape[:2]
+        scale = min(1.0, self.max_side_px / max(h0, w0))
+        if scale < 1.0:
+            rgb = cv2.resize(rgb, (int(round(w0 * scale)), int(round(h0 * scale))), interpolation=cv2.INTER_AREA)
+        h, w = rgb.shape[:2]
+        diag = math.hypot(h, w)
+        d = ink_map(rgb, stroke_px=max(6.0, diag / 100))
+        if trace is not None:
+            trace["scale"] = scale
+        H, err, npts, frame, n, line_ref = self._find_grid(d, diag, trace)
+        probs, feats = self._read_cells(d, H, n, line_ref)
+        cells = probs.argmax(axis=-1)
+        conf = probs.max(axis=-1)
+        if scale < 1.0:
+            H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
+            err /= scale
+        return BoardReading(cells.astype(np.int64), conf, probs, H, float(err), npts, frame, feats)
+
+    # -- grid ------------------------------------------------------------------------
+    def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None
+                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, float]:
+        trace = {} if trace is None else trace
+        h, w = d.shape
+        t0 = max(0.18, float(np.percentile(d[::2, ::2], 99.5)) * 0.35)
+        mask = (d > t0).astype(np.uint8)
+        if mask.mean() < 1e-4:
+            raise NoBoardError("the image holds no ink")
+        # straight segments on a shrunk copy (Hough costs grow with the ink pixels), then
+        # each merged line refitted to the full-resolution ink around it
+        f = max(1, int(round(max(h, w) / 400)))
+        small = cv2.resize(d, (w // f, h // f), interpolation=cv2.INTER_AREA) if f > 1 else d
+        segs = _segments((small > 0.8 * t0).astype(np.uint8), 0.08 * diag / f) * f
+        tol = 0.006 * diag + 2
+        lines = [ln for ln in (_refit(ln, mask, tol) for ln in _merge(segs, tol)) if ln is not None]
+        trace["lines"] = lines
+        if len(lines) < 4:
+            raise NoBoardError(f"{len(lines)} straight lines found; a grid needs at least 2 + 2")
+        fa, fb = _families(lines)
+        if len(fa) < 2 or len(fb) < 2:
+            raise NoBoardError(f"lines in one direction only ({len(fa)} and {len(fb)}); a grid needs two")
+        # columns: the family whose lines run closer to the image vertical
+        if np.mean([abs(math.cos(ln.theta)) for ln in fa]) < np.mean([abs(math.cos(ln.theta)) for ln in fb]):
+            fa, fb = fb, fa
+        cols, rows = self._field_lines(fa, mask, tol), self._field_lines(fb, mask, tol)
+        if len(cols) < 2 or len(rows) < 2:
+            raise NoBoardError(f"{len(cols)} column and {len(rows)} row lines of field length; a grid needs 2 + 2")
+        # columns left to right and rows top to bottom, as the image shows them
+        if (cols[0].p0 + cols[0].p1)[0] > (cols[-1].p0 + cols[-1].p1)[0]:
+            cols.reverse()
+        if (rows[0].p0 + rows[0].p1)[1] > (rows[-1].p0 + rows[-1].p1)[1]:
+            rows.reverse()
+        trace["cols"], trace["rows"] = cols, rows
+        near = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_RECT, (5, 5)))
+        Hl, nodes, err = self._lattice(cols, rows)
+        trace["lattice"], trace["nodes"] = Hl, nodes
+        (i0, j0), (i1, j1) = nodes.min(axis=0), nodes.max(axis=0)
+        # where is the border? the field's lines run one cell past its outermost interior
+        # lines; a frame line is where the other lines stop
+        ext = [self._extension(Hl, near, axis, at, out, lo, hi)
+               for axis, at, out, lo, hi in ((0, i0, -1, j0, j1), (0, i1, 1, j0, j1), (1, j0, -1, i0, i1),
+                                             (1, j1, 1, i0, i1))]
+        steps = [0 if e < 0.5 else max(1, int(round(e))) for e in ext]
+        trace["extension"] = ext
+        start_c, end_c = i0 - steps[0], i1 + steps[1]
+        start_r, end_r = j0 - steps[2], j1 + steps[3]
+        n_c, n_r = end_c - start_c, end_r - start_r
+        n = self.size
+        if n is None:
+            if n_c != n_r or n_c not in (3, 5):
+                raise NoBoardError(f"a field of {n_c} x {n_r} cells found; expected 3 x 3 or 5 x 5")
+        elif n_c != n or n_r != n:
+            raise NoBoardError(f"a field of {n_c} x {n_r} cells found; expected {n} x {n}")
+        n = int(n_c)
+        H = Hl @ np.array([[1.0, 0, start_c], [0, 1.0, start_r], [0, 0, 1.0]])
+        src = nodes - [start_c, start_r]
+        corners = _apply(H, np.array([[0, 0], [n, 0], [n, n], [0, n]], float))
+        side = math.sqrt(max(cv2.contourArea(corners.astype(np.float32)), 0.0))
+        if side < 0.1 * diag:
+            raise NoBoardError("the grid found is too small to read")
+        c_frame, r_frame = (steps[0] == 0, steps[1] == 0), (steps[2] == 0, steps[3] == 0)
+        line_ref, coverage = self._line_contrast(d, H, n)
+        if coverage < 0.6:
+            raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
+        frame = (c_frame[0], c_frame[1], r_frame[0], r_frame[1])
+        return H, err, len(src), frame, n, line_ref
+
+    def _field_lines(self, fam: list[_Line], mask: np.ndarray, tol: float) -> list[_Line]:
+        """The field's lines of one family, ordered across.
+
+        Pieces of one hand-drawn line (it bends, so its pieces fit slightly different lines)
+        sit at nearly the same place across the family: they are joined and refitted; then
+        lines with less than 45 % of the best line's ink are dropped (symbol strokes).
+        """
+        nrm = np.mean([ln.normal if ln.normal @ fam[0].normal >= 0 else -ln.normal for ln in fam], axis=0)
+        nrm /= np.linalg.norm(nrm)
+        mid = np.mean([0.5 * (ln.p0 + ln.p1) for ln in fam], axis=0)
+        pos = []
+        for ln in fam:
+            den = float(ln.normal @ nrm)
+            pos.append((ln.rho - float(ln.normal @ mid)) / den if abs(den) > 1e-6 else 0.0)
+        order = np.argsort(pos)
+        fam, pos = [fam[i] for i in order], [pos[i] for i in order]
+        longest = max(ln.length for ln in fam)
+        long_pos = [p for ln, p in zip(fam, pos) if ln.length >= 0.45 * longest]
+        typical = float(np.median(np.diff(long_pos))) if len(long_pos) > 1 else longest
+        groups: list[list[_Line]] = []
+        last = -math.inf
+        for ln, p in zip(fam, pos):
+            if groups and p - last < 0.35 * typical:
+                groups[-1].append(ln)
+            else:
+                groups.append([ln])
+            last = p
+        merged = []
+        for g in groups:
+            if len(g) == 1:
+                merged.append(g[0])
+                continue
+            base = max(g, key=lambda ln: ln.length)
+            iv = [tuple(sorted(((ln.p0 - base.p0) @ base.direction, (ln.p1 - base.p0) @ base.direction)))
+                  for ln in g]
+            cover = _union_length(iv)  # ink length: the union of the pieces' extents
+            t0, t1 = min(a for a, _ in iv), max(b for _, b in iv)
+            span = _Line(base.theta, base.rho, float(cover), base.p0 + t0 * base.direction,
+                         base.p0 + t1 * base.direction)
+            fit = _refit(span, mask, 2 * tol)
+            merged.append(_Line(fit.theta, fit.rho, float(cover), fit.p0, fit.p1) if fit else span)
+        best = max(ln.length for ln in merged)
+        return [ln for ln in merged if ln.length >= 0.45 * best]
+
+    def _lattice(self, cols: list[_Line], rows: list[_Line]) -> tuple[np.ndarray, np.ndarray, float]:
+        """Fit the grid lattice to the line crossings: ``(H, nodes, rms)``, H taking lattice
+        coordinates (cells) to pixels, ``nodes`` the integer lattice points that crossings
+        support and ``rms`` the crossings' distance from them (px).
+
+        Every cell made by two neighbouring column lines and two neighbouring row lines is a
+        hypothesis; it predicts the whole lattice, and scores by the crossings that fall on
+        lattice points (within a fifth of a cell) less half the lattice points inside the
+        supported range that no crossing supports - so a stray line between two real ones,
+        which would halve the spacing, loses. The best is refined on its inliers.
+        """
+        P = np.array([[p if (p := _intersect(a, b)) is not None else (np.nan, np.nan) for b in rows] for a in cols],
+                     dtype=np.float64).reshape(-1, 2)
+        P = P[np.all(np.isfinite(P), axis=1)]
+        if len(P) < 4:
+            raise NoBoardError("the grid lines do not intersect")
+        best: tuple[float, np.ndarray, np.ndarray] | None = None
+        unit = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
+        for a in range(len(cols) - 1):
+            for b in range(len(rows) - 1):
+                quad = [_intersect(cols[a], rows[b]), _intersect(cols[a + 1], rows[b]),
+                        _intersect(cols[a + 1], rows[b + 1]), _intersect(cols[a], rows[b + 1])]
+                if any(q is None for q in quad):
+                    continue
+                try:
+                    H0 = cv2.getPerspectiveTransform(unit, np.array(quad, np.float32)).astype(np.float64)
+                    Hinv = np.linalg.inv(H0)
+                except (cv2.error, np.linalg.LinAlgError):
+                    continue
+                scored = self._score_lattice(Hinv, P)
+                if scored is not None and (best is None or scored[0] > best[0]):
+                    best = (scored[0], scored[1], H0)
+        if best is None:
+            raise NoBoardError("the grid lines do not make a projective grid")
+        _, inl, H = best
+        for _ in range(3):  # refine on the inliers, re-assign
+            Hinv = np.linalg.inv(H)
+            L = _apply(Hinv, P)
+            R = np.rint(L)
+            inl = np.all(np.abs(L - R) < 0.2, axis=1)
+            if inl.sum() < 4:
+                break
+            Hn, _ = cv2.findHomography(R[inl], P[inl], 0)
+            if Hn is None or not np.all(np.isfinite(Hn)):
+                break
+            H = Hn
+        L = _apply(np.linalg.inv(H), P)
+        R = np.rint(L)
+        inl = np.all(np.abs(L - R) < 0.2, axis=1)
+        if inl.sum() < 4:
+            raise NoBoardError("too few grid crossings fit one lattice")
+        nodes = np.unique(R[inl].astype(int), axis=0)
+        res = _apply(H, R[inl]) - P[inl]
+        return H, nodes, float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
+
+    @staticmethod
+    def _score_lattice(Hinv: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarray] | None:
+        L = _apply(Hinv, P)
+        if not np.all(np.isfinite(L)):
+            return None
+        R = np.rint(L)
+        inl = np.all(np.abs(L - R) < 0.2, axis=1)
+        if inl.sum() < 4:
+            return None
+        nodes = np.unique(R[inl].astype(int), axis=0)
+        lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+        if np.any(hi - lo > 8):
+            return None
+        box = int(np.prod(hi - lo + 1))
+        return len(nodes) - 0.5 * (box - len(nodes)), inl
+
+    @staticmethod
+    def _extension(H: np.ndarray, near: np.ndarray, axis: int, at: int, outwards: int, lo: int, hi: int) -> float:
+        """How far (in cells) the lattice lines that cross lattice line ``at`` run on past it
+        as ink, going ``outwards`` (-1 or +1): the median over those lines (``lo..hi``) of
+        the ink run from the crossing; two misses in a row end a run.
+
+        ``axis`` 0: the column line ``u = at``, crossed by the rows; 1: the row line ``v = at``.
+        """
+        h, w = near.shape
+        t = np.arange(0.1, 2.6, 0.1)
+        runs = []
+        for k in range(int(lo), int(hi) + 1):
+            along = at + outwards * t
+            pts = np.stack([along, np.full_like(t, k)], -1) if axis == 0 else np.stack([np.full_like(t, k), along], -1)
+            px = np.rint(_apply(H, pts)).astype(int)
+            inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+            hit = np.zeros(len(t), bool)
+            hit[inside] = near[px[inside, 1], px[inside, 0]] > 0
+            miss = np.flatnonzero(~hit[:-1] & ~hit[1:])
+            runs.append(float(t[miss[0]]) - 0.1 if len(miss) else float(t[-1]))
+        return float(np.median(runs)) if runs else 0.0
+
+    def _line_contrast(self, d: np.ndarray, H: np.ndarray, n: int) -> tuple[float, float]:
+        """Median peak darkness along the interior grid lines (the contrast of real ink) and
+        the share of the lines' length that carries ink at all."""
+        t = np.linspace(0.15, n - 0.15, 6 * n)
+        pts = []
+        for i in range(1, n):
+            pts.append(np.stack([np.full_like(t, i), t], -1))
+            pts.append(np.stack([t, np.full_like(t, i)], -1))
+        px = np.rint(_apply(H, np.concatenate(pts))).astype(int)
+        hgt, wid = d.shape
+        ok = (px[:, 0] >= 0) & (px[:, 0] < wid) & (px[:, 1] >= 0) & (px[:, 1] < hgt)
+        if not ok.any():
+            return 0.5, 0.0
+        dm = cv2.dilate(d, cv2.getStructuringElement(cv2.MORPH_RECT, (5, 5)))
+        vals = dm[px[ok, 1], px[ok, 0]]
+        floor = 0.15
+        on = vals[vals > floor]
+        return (float(np.median(on)) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
+
+    # -- cells -----------------------------------------------------------------------
+    def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float) -> tuple[np.ndarray, np.ndarray]:
+        s = self.cell_px
+        o = s // 2  # half a cell of margin all round: marks that cross the border stay whole
+        # rectified px -> grid cells, with the margin
+        M = H @ np.array([[1.0 / s, 0, -o / s], [0, 1.0 / s, -o / s], [0, 0, 1.0]])
+        side = n * s + 2 * o
+        rect = cv2.warpPerspective(d, M, (side, side), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        rect = _remove_grid_lines(rect, n, s, o, max(0.12, 0.4 * line_ref))
+        thr = max(0.1, 0.25 * line_ref)
+        mg = s // 4
+        feats = np.zeros((n, n, len(_FEATURES)))
+        for r in range(n):
+            for c in range(n):
+                y0, x0 = o + r * s - mg, o + c * s - mg
+                feats[r, c] = cell_features(rect[y0:y0 + s + 2 * mg, x0:x0 + s + 2 * mg], thr, mg)
+        return _probabilities(feats, line_ref), feats
+
+
+def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float) -> np.ndarray:
+    """Blank the grid lines of a rectified board (cells ``s`` px, field offset ``o`` px).
+
+    Each of the ``n + 1`` lines each way is tracked along its length - per row (column),
+    where the darkness peaks within a fifth of a cell of its place - and the track is
+    fitted with a quadratic, refitted without the rows that stray (a symbol touching the
+    line pulls the peak away there). A line that is not there for most of its length (a
+    missing frame side) is left alone; a line that is there is blanked over its own width
+    along the fitted track. Only the line's band goes: an O drawn against a line keeps the
+    rest of its ring.
+    """
+    out = rect.copy()
+    b = max(2, s // 5)
+    side = rect.shape[0]
+    ys = np.arange(side, dtype=np.float64)
+    for transpose in (False, True):
+        img = rect.T if transpose else rect
+        dst = out.T if transpose else out
+        for i in range(n + 1):
+            x = o + i * s
+            lo, hi = max(0, x - b), min(side, x + b + 1)
+            band = cv2.blur(np.ascontiguousarray(img[:, lo:hi]), (1, 9))  # smoothed along the line
+            arg = band.argmax(axis=1)
+            peak = band[np.arange(side), arg]
+            on = peak > present
+            field = slice(o, o + n * s)
+            if on[field].mean() < 0.5:
+                continue
+            rows = np.flatnonzero(on)
+            centre = arg[rows] + lo
+            keep = np.ones(len(rows), bool)
+            for _ in range(3):
+                coef = np.polyfit(ys[rows[keep]], centre[keep], 2)
+                res = centre - np.polyval(coef, ys[rows])
+                keep = np.abs(res) <= 2.0
+                if keep.sum() < 0.3 * len(rows):
+                    break
+            if keep.sum() < 0.7 * n * s:  # no straight line along most of the field: symbols only
+                continue
+            track = np.polyval(coef, ys)
+            width = (band[rows[keep]] > 0.5 * peak[rows[keep], None]).sum(axis=1) if keep.any() else np.array([3])
+            half = 0.5 * float(np.median(width)) + 1.5
+            c0 = np.clip(np.floor(track[rows] - half).astype(int), 0, side)
+            c1 = np.clip(np.ceil(track[rows] + half).astype(int) + 1, 0, side)
+            for r, a, e in zip(rows.tolist(), c0.tolist(), c1.tolist()):
+                dst[r, a:e] = 0.0
+    return out
+
+
+def debug_image(image: object, reading: BoardReading | None, trace: dict[str, object],
+                error: str | None = None) -> np.ndarray:
+    """An RGB picture of what the reader did: the straight lines it found (columns red,
+    rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
+    each cell's call with its confidence - or, without a board, the reason in red."""
+    img = _as_rgb(image).copy()
+    k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
+    for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
+        for ln in trace.get(key, []):  # type: ignore[union-attr]
+            cv2.line(img, tuple(np.rint(ln.p0 * k).astype(int)), tuple(np.rint(ln.p1 * k).astype(int)), colour, 2,
+                     cv2.LINE_AA)
+    if "lattice" in trace and "nodes" in trace:
+        for p in _apply(trace["lattice"], trace["nodes"].astype(float)) * k:  # type: ignore[union-attr, arg-type]
+            cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
+    if reading is not None:
+        n, H = reading.n, reading.homography
+        for i in range(n + 1):
+            for a, b in (((i, 0), (i, n)), ((0, i), (n, i))):
+                p = np.rint(_apply(H, np.array([a, b], float))).astype(int)
+                cv2.line(img, tuple(p[0]), tuple(p[1]), (0, 200, 0), 1, cv2.LINE_AA)
+        for r in range(n):
+            for c in range(n):
+                p = np.rint(_apply(H, np.array([[c + 0.5, r + 0.5]]))).astype(int)[0]
+                label = f"{_SYMBOL[int(reading.cells[r, c])]}{reading.confidence[r, c]:.2f}"
+                cv2.putText(img, label, (p[0] - 16, p[1] + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.38, (0, 120, 0), 1,
+                            cv2.LINE_AA)
+    if error:
+        cv2.putText(img, error[:90], (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0), 1, cv2.LINE_AA)
+    return img
+
+
+class ThresholdReader:
+    """Seed 003's camera rule, kept as the baseline: in each of ``n x n`` fixed image regions
+    (calibrated once, for a camera that never moves), the share of pixels darker than
+    ``grey_level`` (of 255); above ``min_share`` the cell is "filled". It cannot tell X
+    from O: as in the thesis, filled cells that are not the arm's own (``own``) are the
+    opponent's.
+
+    Args:
+        regions: ``(n * n, 4, 2)`` quadrilaterals (px), row-major from the top-left cell.
+        grey_level: the thesis's threshold (80).
+        min_share: share of dark pixels that makes a cell filled.
+    """
+
+    def __init__(self, regions: object, grey_level: float = 80.0, min_share: float = 0.03) -> None:
+        reg = np.asarray(regions, dtype=np.float64)
+        n = int(round(math.sqrt(reg.shape[0]))) if reg.ndim == 3 else 0
+        if reg.ndim != 3 or reg.shape[1:] != (4, 2) or n * n != reg.shape[0]:
+            raise VisionError(f"regions of shape {reg.shape}; expected (n*n, 4, 2) quadrilaterals")
+        self.regions, self.n = reg, n
+        self.grey_level, self.min_share = float(grey_level), float(min_share)
+
+    @classmethod
+    def calibrated(cls, homography: object, n: int, inset: float = 0.2, **kw: float) -> ThresholdReader:
+        """Regions from a one-time calibration: ``homography`` maps grid cells to image px
+        (as :attr:`BoardReading.homography`); each region is its cell shrunk by ``inset``."""
+        H = np.asarray(homography, dtype=np.float64)
+        regs = []
+        for r in range(n):
+            for c in range(n):
+                q = np.array([[c + inset, r + inset], [c + 1 - inset, r + inset],
+                              [c + 1 - inset, r + 1 - inset], [c + inset, r + 1 - inset]])
+                regs.append(_apply(H, q))
+        return cls(np.array(regs), **kw)
+
+    def shares(self, image: object) -> np.ndarray:
+        """Share of dark pixels per region, ``(n, n)``."""
+        rgb = _as_rgb(image)
+        grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+        dark = (grey < self.grey_level).astype(np.uint8)
+        out = np.zeros(self.n * self.n)
+        mask = np.zeros_like(dark)
+        for i, q in enumerate(self.regions):
+            mask[...] = 0
+            cv2.fillConvexPoly(mask, np.rint(q).astype(np.int32), 1)
+            area = int(mask.sum())
+            out[i] = float((dark & mask).sum()) / area if area else 0.0
+        return out.reshape(self.n, self.n)
+
+    def read(self, image: object, own: Sequence[tuple[int, int]] = (), own_symbol: int = X) -> np.ndarray:
+        """Cells ``(n, n)``: 0 empty, else ``own_symbol`` for cells in ``own`` and the other
+        symbol for every other filled cell (the thesis's "Percent-process")."""
+        filled = self.shares(image) > self.min_share
+        other = O if own_symbol == X else X
+        cells = np.where(filled, other, EMPTY)
+        for r, c in own:
+            if filled[r, c]:
+                cells[r, c] = own_symbol
+        return cells
