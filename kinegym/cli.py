@@ -475,6 +475,10 @@ def build_parser() -> argparse.ArgumentParser:
     climber_opts(ss)
     common(ss)
     ss.set_defaults(func=cmd_sensor_study, map_default=0.01)
+
+    from kinegym import cli_game
+
+    cli_game.add_parsers(sub, common)
     return p
 
 
@@ -499,13 +503,16 @@ def _glue_negative_values(argv: list[str]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code (also used by the ``kinegym`` script)."""
     from configs import ConfigError
+    from envs.game import GameError
     from kinematics.errors import InvalidInputError, UnreachableError
+    from vision.errors import NoBoardError, VisionError
 
     argv = _glue_negative_values(list(sys.argv[1:] if argv is None else argv))
     want_json = "--json" in argv
     handlers: list[tuple[type[BaseException], int]] = [
         (UsageError, EXIT_USAGE), (ConfigError, EXIT_USAGE), (InvalidInputError, EXIT_USAGE),
-        (UnreachableError, EXIT_NO_ANSWER),
+        (UnreachableError, EXIT_NO_ANSWER), (NoBoardError, EXIT_NO_ANSWER), (VisionError, EXIT_USAGE),
+        (GameError, EXIT_USAGE),
     ]
     try:
         args = build_parser().parse_args(argv)

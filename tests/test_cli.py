@@ -118,3 +118,47 @@ def test_sensor_study_cli(capsys: pytest.CaptureFixture[str], tmp_path: Path) ->
     assert [round(r["sigma_deg"], 6) for r in res["rows"]] == [0.2, 1.0]
     assert all(r["wrong"] == 0 for r in res["rows"])
     assert (tmp_path / "sensor_study.png").stat().st_size > 5000
+
+
+def test_solve_prints_value_and_best_moves(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run(capsys, "solve", "XX.|OO.|...", "--json")
+    assert code == 0
+    res = json.loads(out)
+    assert res["value"] == 1 and res["best_moves"] == [[0, 2]] and res["to_move"] == "X"
+    code, out, _ = run(capsys, "solve", ".....|.....|..X..|.....|.....")
+    assert code == 0 and "draw for O" in out and "(1, 1)" in out
+
+
+def test_solve_bad_and_finished_boards(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run(capsys, "solve", "XX.|O.")
+    assert code == 2 and "rows of lengths" in err
+    code, out, _ = run(capsys, "solve", "XXX|OO.|...", "--json")
+    assert code == 3 and json.loads(out)["result"] == "X wins"
+
+
+def test_match_tallies(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run(capsys, "match", "--x", "random", "--o", "solver", "--games", "4", "--board", "3", "--json")
+    res = json.loads(out)
+    assert code == 0 and res["games"] == 4 and res["x_wins"] == 0
+    code, _, err = run(capsys, "match", "--x", "nobody")
+    assert code == 2 and "'nobody'" in err
+
+
+def test_read_board_reads_a_photo_and_refuses_a_blank(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import cv2
+    import numpy as np
+
+    from envs.sim.scenes import random_scene
+
+    sc = random_scene(5, difficulty="hard")
+    img = tmp_path / "board.jpg"
+    cv2.imwrite(str(img), sc.photo.image[..., ::-1])
+    dbg = tmp_path / "debug.png"
+    code, out, _ = run(capsys, "read-board", str(img), "--size", "5", "--json", "--debug", str(dbg))
+    assert code == 0 and json.loads(out)["cells"] == sc.cells.tolist() and dbg.stat().st_size > 1000
+    blank = tmp_path / "blank.png"
+    cv2.imwrite(str(blank), np.full((240, 320, 3), 230, np.uint8))
+    code, out, _ = run(capsys, "read-board", str(blank), "--json")
+    assert code == 3 and json.loads(out)["error"] == "NoBoardError"
+    code, _, err = run(capsys, "read-board", str(tmp_path / "missing.png"))
+    assert code == 2 and "does not exist" in err

@@ -44,6 +44,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from .errors import NoBoardError, VisionError
+
 __all__ = [
     "EMPTY",
     "X",
@@ -60,18 +62,6 @@ __all__ = [
 
 EMPTY, X, O = 0, 1, 2
 _SYMBOL = {EMPTY: ".", X: "X", O: "O"}
-
-
-class VisionError(ValueError):
-    """Bad input to the reader (not an image, wrong size argument, ...)."""
-
-
-class NoBoardError(VisionError):
-    """No tic-tac-toe grid could be found in the image; ``reason`` says what was missing."""
-
-    def __init__(self, reason: str) -> None:
-        super().__init__(f"no board found: {reason}")
-        self.reason = reason
 
 
 @dataclass
@@ -196,22 +186,26 @@ def _merge(segs: np.ndarray, tol: float) -> list[_Line]:
         return []
     d = segs[:, 2:] - segs[:, :2]
     length = np.hypot(d[:, 0], d[:, 1])
-    groups: list[tuple[_Line, list[int]]] = []
+    # each group is founded by its longest segment, whose line decides membership
+    founders: list[tuple[np.ndarray, float]] = []
+    members: list[list[int]] = []
     for i in np.argsort(-length):
         a, b = segs[i, :2], segs[i, 2:]
-        for g, (ln, members) in enumerate(groups):
-            if abs(a @ ln.normal - ln.rho) <= tol and abs(b @ ln.normal - ln.rho) <= tol:
-                members.append(int(i))
-                idx = np.array(members)
-                pts = np.concatenate([segs[idx, :2], segs[idx, 2:]])
-                groups[g] = (_fit_points(pts, np.tile(length[idx], 2), float(length[idx].sum())), members)
+        for g, (nrm, rho) in enumerate(founders):
+            if abs(a @ nrm - rho) <= tol and abs(b @ nrm - rho) <= tol:
+                members[g].append(int(i))
                 break
         else:
-            groups.append((_fit_points(np.stack([a, b]), np.ones(2), float(length[i])), [int(i)]))
+            nrm = np.array([-(b - a)[1], (b - a)[0]]) / max(float(length[i]), 1e-9)
+            founders.append((nrm, float(a @ nrm)))
+            members.append([int(i)])
     out = []
-    for ln, members in groups:  # length: the union of the pieces along the line, not their sum
-        iv = [tuple(sorted(((segs[i, :2] - ln.p0) @ ln.direction, (segs[i, 2:] - ln.p0) @ ln.direction)))
-              for i in members]
+    for idx in members:
+        ix = np.array(idx)
+        ln = _fit_points(np.concatenate([segs[ix, :2], segs[ix, 2:]]), np.tile(length[ix], 2), 0.0)
+        # length: the union of the pieces along the line, not their sum
+        ta, tb = (segs[ix, :2] - ln.p0) @ ln.direction, (segs[ix, 2:] - ln.p0) @ ln.direction
+        iv = list(zip(np.minimum(ta, tb).tolist(), np.maximum(ta, tb).tolist()))
         out.append(_Line(ln.theta, ln.rho, _union_length(iv), ln.p0, ln.p1))
     return out
 
@@ -228,30 +222,56 @@ def _union_length(intervals: Sequence[tuple[float, float]]) -> float:
 
 
 def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
-    p = np.cross(a.homog(), b.homog())
-    if abs(p[2]) < 1e-9:
+    """Crossing point of two lines (px), None if they are parallel."""
+    ca, sa, cb, sb = math.cos(a.theta), math.sin(a.theta), math.cos(b.theta), math.sin(b.theta)
+    det = ca * sb - sa * cb
+    if abs(det) < 1e-9:
         return None
-    return p[:2] / p[2]
+    return np.array([(a.rho * sb - b.rho * sa) / det, (ca * b.rho - cb * a.rho) / det])
 
 
-def _refit(ln: _Line, mask: np.ndarray, band: float) -> _Line | None:
-    """The line refitted (total least squares) to the full-resolution ink within ``band`` px
-    of it, between its ends; None if no ink is there."""
-    h, w = mask.shape
-    pad = band + 2
-    x0, x1 = int(max(0, min(ln.p0[0], ln.p1[0]) - pad)), int(min(w, max(ln.p0[0], ln.p1[0]) + pad + 1))
-    y0, y1 = int(max(0, min(ln.p0[1], ln.p1[1]) - pad)), int(min(h, max(ln.p0[1], ln.p1[1]) + pad + 1))
-    ys, xs = np.nonzero(mask[y0:y1, x0:x1])
-    if len(xs) < 10:
-        return None
-    pts = np.stack([xs + x0, ys + y0], -1).astype(np.float64)
-    dist = pts @ ln.normal - ln.rho
-    along = (pts - ln.p0) @ ln.direction
+def _refit(ln: _Line, ink: np.ndarray, floor: float, band: float) -> _Line | None:
+    """The line refitted to the full-resolution ink map around it: every 2 px along the line
+    (and a little past its ends), the darkness-weighted centre of the ink within ``band`` px
+    across it, then a weighted total-least-squares line through those centres. None if no
+    ink is there."""
+    h, w = ink.shape
     length = float(np.linalg.norm(ln.p1 - ln.p0))
-    sel = (np.abs(dist) <= band) & (along >= -pad) & (along <= length + pad)
-    if sel.sum() < 10:
+    t = np.arange(-band, length + band + 1.0, 2.0)
+    u = np.arange(-math.ceil(band), math.ceil(band) + 1.0)
+    pts = ln.p0[None, None, :] + t[:, None, None] * ln.direction + u[None, :, None] * ln.normal
+    x = np.clip(np.rint(pts[..., 0]).astype(np.intp), 0, w - 1)
+    y = np.clip(np.rint(pts[..., 1]).astype(np.intp), 0, h - 1)
+    wt = np.maximum(ink[y, x] - floor, 0.0)
+    tot = wt.sum(axis=1)
+    on = tot > 0
+    if on.sum() < 5:
         return None
-    return _fit_points(pts[sel], np.ones(int(sel.sum())), ln.length)
+    off = (wt[on] * u).sum(axis=1) / tot[on]
+    centres = ln.p0 + t[on, None] * ln.direction + off[:, None] * ln.normal
+    return _fit_points(centres, tot[on], ln.length)
+
+
+def _crossing(fam: list[_Line], other: list[_Line], slack: float) -> list[_Line]:
+    """The lines of ``fam`` that cross at least two lines of ``other``, and at least half
+    of them, within both lines' drawn extents (``slack`` px beyond the ends allowed): a
+    paper edge, a shadow's edge or a row of symbol strokes crosses few of the field's lines."""
+    if len(other) < 2:
+        return fam
+    out = []
+    for a in fam:
+        hits = 0
+        la = float(np.linalg.norm(a.p1 - a.p0))
+        for b in other:
+            p = _intersect(a, b)
+            if p is None:
+                continue
+            ta, tb = (p - a.p0) @ a.direction, (p - b.p0) @ b.direction
+            lb = float(np.linalg.norm(b.p1 - b.p0))
+            hits += -slack <= ta <= la + slack and -slack <= tb <= lb + slack
+        if hits >= max(2, (len(other) + 1) // 2):
+            out.append(a)
+    return out
 
 
 def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
@@ -277,10 +297,11 @@ def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
 
 
 # ------------------------------------------------------------------ cells
-_FEATURES = ("peak", "ink", "hollow", "hole", "extent")
+_FEATURES = ("peak", "ink", "hollow", "hole", "extent", "elongation", "spread")
 
 
-def cell_features(patch: np.ndarray, threshold: float, margin: int) -> np.ndarray:
+def cell_features(patch: np.ndarray, threshold: float, margin: int, peak: float | None = None,
+                  min_peak: float = 0.0) -> np.ndarray:
     """Features of one rectified cell: ``patch`` is the cell's darkness with ``margin`` px of
     its neighbours around it (so a mark that crosses the cell's border stays whole) and its
     grid lines already removed.
@@ -296,10 +317,20 @@ def cell_features(patch: np.ndarray, threshold: float, margin: int) -> np.ndarra
     * ``hole``: area of the largest background region enclosed by the mark (after closing
       small gaps), relative to the mark's bounding box (an O encloses one).
     * ``extent``: the mark's bounding-box size relative to the cell.
+    * ``elongation``: the square root of the ratio of the ink's principal second moments:
+      about 1 for an X or an O, large for a stray straight stroke (the end of a grid line).
+    * ``spread``: the coefficient of variation of the ink's whitened distance from its
+      centroid: small for a ring (an O, closed or not), large for strokes that run from the
+      middle out (an X, also a lopsided one whose crossing is off its centre).
+
+    ``peak`` may be passed in when known; a cell whose peak is below ``min_peak`` holds no
+    real ink and returns at once.
     """
     size = patch.shape[0] - 2 * margin
-    inner = patch[margin:margin + size, margin:margin + size]
-    peak = float(np.percentile(inner, 99))
+    if peak is None:
+        peak = float(np.percentile(patch[margin:margin + size, margin:margin + size], 99))
+    if peak < min_peak:
+        return np.array([peak, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
     m = (patch > max(threshold, 0.5 * peak)).astype(np.uint8)
     n_lab, lab, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8)
     lo, hi = margin - 0.5, margin + size - 0.5
@@ -307,47 +338,55 @@ def cell_features(patch: np.ndarray, threshold: float, margin: int) -> np.ndarra
     keep[1:] = ((stats[1:, cv2.CC_STAT_AREA] >= max(4, int(0.015 * size * size)))
                 & (cents[1:, 0] > lo) & (cents[1:, 0] < hi) & (cents[1:, 1] > lo) & (cents[1:, 1] < hi))
     if not keep.any():
-        return np.array([peak, 0.0, 0.0, 0.0, 0.0])
+        return np.array([peak, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
     m = keep[lab].astype(np.uint8)
     ys, xs = np.nonzero(m)
     ink = len(xs) / float(size * size)
     x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
     bw, bh = x1 - x0 + 1, y1 - y0 + 1
     extent = max(bw, bh) / size
-    pts = np.stack([xs, ys], -1).astype(np.float64)
-    mu = pts.mean(axis=0)
-    c = pts - mu
-    cov = c.T @ c / len(c) + 1e-6 * np.eye(2)
-    evals, evecs = np.linalg.eigh(cov)
-    # the middle of the mark, in whitened units (an O's hole spans more than 0.4 of them)
-    yy, xx = np.mgrid[y0:y1 + 1, x0:x1 + 1]
-    z = (np.stack([xx - mu[0], yy - mu[1]], -1) @ evecs) / np.sqrt(evals)
-    middle = (z[..., 0] ** 2 + z[..., 1] ** 2) < 0.4 ** 2
+    # the middle of the mark, in whitened units (an O's hole spans more than 0.4 of them):
+    # points p with (p - mu)' C^-1 (p - mu) < 0.4^2, C the ink's covariance
+    mx, my = float(xs.mean()), float(ys.mean())
+    dx, dy = xs - mx, ys - my
+    cxx, cxy, cyy = float((dx * dx).mean()) + 1e-6, float((dx * dy).mean()), float((dy * dy).mean()) + 1e-6
+    det = cxx * cyy - cxy * cxy
+    half_tr = 0.5 * (cxx + cyy)
+    root = math.sqrt(max(half_tr * half_tr - det, 0.0))
+    elongation = math.sqrt((half_tr + root) / max(half_tr - root, 1e-6))
+    # whitened radius r^2 = d' C^-1 d of every ink pixel
+    r = np.sqrt(np.maximum((cyy * dx * dx - 2 * cxy * dx * dy + cxx * dy * dy) / det, 0.0))
+    spread = float(r.std() / max(float(r.mean()), 1e-6))
+    gx = (np.arange(x0, x1 + 1) - mx)[None, :]
+    gy = (np.arange(y0, y1 + 1) - my)[:, None]
+    middle = (cyy * gx * gx - 2 * cxy * gx * gy + cxx * gy * gy) < 0.16 * det
     fill = float(m[y0:y1 + 1, x0:x1 + 1][middle].mean()) if middle.any() else 0.0
     hollow = float(np.clip(1.0 - fill, 0.0, 1.0))
     # enclosed background: flood the outside of the (gap-closed) mark from the border
     ck = max(3, int(round(0.08 * size)) | 1)
     closed = cv2.morphologyEx(m, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ck, ck)))
-    flood = np.pad(closed, 1)
+    flood = cv2.copyMakeBorder(closed, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
     cv2.floodFill(flood, None, (0, 0), 2)
     enclosed = (flood[1:-1, 1:-1] == 0).astype(np.uint8)
     n_h, _, st_h, _ = cv2.connectedComponentsWithStats(enclosed, connectivity=4)
     hole = float(st_h[1:, cv2.CC_STAT_AREA].max()) / float(bw * bh) if n_h > 1 else 0.0
-    return np.array([peak, ink, hollow, hole, extent])
+    return np.array([peak, ink, hollow, hole, extent, elongation, spread])
 
 
 def _probabilities(f: np.ndarray, ref: float) -> np.ndarray:
-    """``(..., 5)`` features -> ``(..., 3)`` probabilities of empty / X / O.
+    """``(..., 7)`` features -> ``(..., 3)`` probabilities of empty / X / O.
 
     A mark needs real ink - a peak at least 40 % as dark as the grid lines (``ref``), which
-    ghosts of erased marks and graph paper are not - and some size: ``p(mark)`` is the
-    product of two sigmoids. Given a mark, ``p(O) = sigmoid(b)``: a hollow middle and an
-    enclosed hole mean O; ink spread out from the centre and no hole mean X.
+    ghosts of erased marks and graph paper are not - and some size, and it must not be a
+    single straight stroke: ``p(mark)`` is the product of two sigmoids. Given a mark,
+    ``p(O) = sigmoid(b)``: a ring-like spread of the ink about its centre, a hollow middle
+    and an enclosed hole mean O. (On 20,000 rendered marks the spread alone separates them:
+    every X above 0.40, every O below 0.30; the weights put the boundary between.)
     """
-    peak, ink, hollow, hole, extent = (f[..., i] for i in range(5))
+    peak, ink, hollow, hole, extent, elongation, spread = (f[..., i] for i in range(7))
     a_dark = 25.0 * (peak / max(ref, 1e-3) - 0.4)
-    a_size = 60.0 * (ink - 0.015) + 12.0 * (extent - 0.25)
-    b = 12.0 * (hollow - 0.3) + 4.0 * (hole - 0.1)
+    a_size = 60.0 * (ink - 0.015) + 12.0 * (extent - 0.25) - 3.0 * np.maximum(elongation - 4.0, 0.0)
+    b = 12.0 * (hollow - 0.5) + 25.0 * (0.34 - spread) + 4.0 * hole
 
     def sig(v: np.ndarray) -> np.ndarray:
         return 1.0 / (1.0 + np.exp(-np.clip(v, -50, 50)))
@@ -415,7 +454,10 @@ class BoardReader:
         small = cv2.resize(d, (w // f, h // f), interpolation=cv2.INTER_AREA) if f > 1 else d
         segs = _segments((small > 0.8 * t0).astype(np.uint8), 0.08 * diag / f) * f
         tol = 0.006 * diag + 2
-        lines = [ln for ln in (_refit(ln, mask, tol) for ln in _merge(segs, tol)) if ln is not None]
+        merged = _merge(segs, tol)
+        shortest = 0.25 * max((ln.length for ln in merged), default=0.0)  # symbol strokes: not worth a refit
+        refit = [_refit(ln, d, t0, tol) for ln in merged if ln.length >= shortest]
+        lines = [ln for ln in refit if ln is not None]
         trace["lines"] = lines
         if len(lines) < 4:
             raise NoBoardError(f"{len(lines)} straight lines found; a grid needs at least 2 + 2")
@@ -425,7 +467,9 @@ class BoardReader:
         # columns: the family whose lines run closer to the image vertical
         if np.mean([abs(math.cos(ln.theta)) for ln in fa]) < np.mean([abs(math.cos(ln.theta)) for ln in fb]):
             fa, fb = fb, fa
-        cols, rows = self._field_lines(fa, mask, tol), self._field_lines(fb, mask, tol)
+        cols, rows = self._field_lines(fa, d, t0, tol), self._field_lines(fb, d, t0, tol)
+        for _ in range(2):  # a field line crosses the other family's lines where both are drawn
+            cols, rows = _crossing(cols, rows, 3 * tol), _crossing(rows, cols, 3 * tol)
         if len(cols) < 2 or len(rows) < 2:
             raise NoBoardError(f"{len(cols)} column and {len(rows)} row lines of field length; a grid needs 2 + 2")
         # columns left to right and rows top to bottom, as the image shows them
@@ -436,25 +480,21 @@ class BoardReader:
         trace["cols"], trace["rows"] = cols, rows
         near = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_RECT, (5, 5)))
         Hl, nodes, err = self._lattice(cols, rows)
-        trace["lattice"], trace["nodes"] = Hl, nodes
         (i0, j0), (i1, j1) = nodes.min(axis=0), nodes.max(axis=0)
+        # the outermost lattice lines must be drawn along their length: a line of symbol
+        # strokes that happens to fall on the lattice is not (its ink covers little of it)
+        i0, i1 = self._drawn_range(Hl, near, 0, i0, i1, j0, j1)
+        j0, j1 = self._drawn_range(Hl, near, 1, j0, j1, i0, i1)
+        nodes = nodes[(nodes[:, 0] >= i0) & (nodes[:, 0] <= i1) & (nodes[:, 1] >= j0) & (nodes[:, 1] <= j1)]
+        trace["lattice"], trace["nodes"] = Hl, nodes
         # where is the border? the field's lines run one cell past its outermost interior
         # lines; a frame line is where the other lines stop
         ext = [self._extension(Hl, near, axis, at, out, lo, hi)
                for axis, at, out, lo, hi in ((0, i0, -1, j0, j1), (0, i1, 1, j0, j1), (1, j0, -1, i0, i1),
                                              (1, j1, 1, i0, i1))]
-        steps = [0 if e < 0.5 else max(1, int(round(e))) for e in ext]
         trace["extension"] = ext
-        start_c, end_c = i0 - steps[0], i1 + steps[1]
-        start_r, end_r = j0 - steps[2], j1 + steps[3]
-        n_c, n_r = end_c - start_c, end_r - start_r
-        n = self.size
-        if n is None:
-            if n_c != n_r or n_c not in (3, 5):
-                raise NoBoardError(f"a field of {n_c} x {n_r} cells found; expected 3 x 3 or 5 x 5")
-        elif n_c != n or n_r != n:
-            raise NoBoardError(f"a field of {n_c} x {n_r} cells found; expected {n} x {n}")
-        n = int(n_c)
+        steps, n = self._border_steps(ext, i1 - i0, j1 - j0)
+        start_c, start_r = i0 - steps[0], j0 - steps[2]
         H = Hl @ np.array([[1.0, 0, start_c], [0, 1.0, start_r], [0, 0, 1.0]])
         src = nodes - [start_c, start_r]
         corners = _apply(H, np.array([[0, 0], [n, 0], [n, n], [0, n]], float))
@@ -468,7 +508,7 @@ class BoardReader:
         frame = (c_frame[0], c_frame[1], r_frame[0], r_frame[1])
         return H, err, len(src), frame, n, line_ref
 
-    def _field_lines(self, fam: list[_Line], mask: np.ndarray, tol: float) -> list[_Line]:
+    def _field_lines(self, fam: list[_Line], d: np.ndarray, floor: float, tol: float) -> list[_Line]:
         """The field's lines of one family, ordered across.
 
         Pieces of one hand-drawn line (it bends, so its pieces fit slightly different lines)
@@ -507,7 +547,7 @@ class BoardReader:
             t0, t1 = min(a for a, _ in iv), max(b for _, b in iv)
             span = _Line(base.theta, base.rho, float(cover), base.p0 + t0 * base.direction,
                          base.p0 + t1 * base.direction)
-            fit = _refit(span, mask, 2 * tol)
+            fit = _refit(span, d, floor, 2 * tol)
             merged.append(_Line(fit.theta, fit.rho, float(cover), fit.p0, fit.p1) if fit else span)
         best = max(ln.length for ln in merged)
         return [ln for ln in merged if ln.length >= 0.45 * best]
@@ -583,6 +623,55 @@ class BoardReader:
         box = int(np.prod(hi - lo + 1))
         return len(nodes) - 0.5 * (box - len(nodes)), inl
 
+    def _border_steps(self, ext: list[float], span_c: int, span_r: int) -> tuple[list[int], int]:
+        """Cells from the outermost lines to the border, per side (left, right, top, bottom),
+        and the board size. Each side's run of the other lines past the outermost one says
+        how many (0: a frame line; about 1: the last interior line); when a run sits between
+        two counts, the count that makes a square board of an allowed size wins."""
+        options = []
+        for e in ext:
+            near = {0} if e < 0.35 else {max(1, math.floor(e)), max(1, math.ceil(e))} if e >= 0.65 else {0, 1}
+            options.append(sorted(near, key=lambda k: abs(k - e)))
+        sizes = (self.size,) if self.size is not None else (3, 5)
+        best: tuple[float, list[int], int] | None = None
+        for a in options[0]:
+            for b in options[1]:
+                for c in options[2]:
+                    for d in options[3]:
+                        nc, nr = span_c + a + b, span_r + c + d
+                        if nc != nr or nc not in sizes:
+                            continue
+                        cost = sum(abs(k - e) for k, e in zip((a, b, c, d), ext))
+                        if best is None or cost < best[0]:
+                            best = (cost, [a, b, c, d], nc)
+        if best is None:
+            guess = [o[0] for o in options]
+            nc, nr = span_c + guess[0] + guess[1], span_r + guess[2] + guess[3]
+            want = f"{self.size} x {self.size}" if self.size else "3 x 3 or 5 x 5"
+            raise NoBoardError(f"a field of {nc} x {nr} cells found; expected {want}")
+        return best[1], best[2]
+
+    @staticmethod
+    def _drawn_range(H: np.ndarray, near: np.ndarray, axis: int, lo: int, hi: int, a: int, b: int
+                     ) -> tuple[int, int]:
+        """Trim ``lo..hi`` (lattice lines along ``axis``; 0 = columns) to the outermost lines
+        that carry ink along at least 60 % of their length between ``a`` and ``b``."""
+        h, w = near.shape
+        t = np.linspace(a, b, 12 * max(1, b - a) + 1)
+        t = t[np.abs(t - np.rint(t)) > 0.15]  # away from the crossings, which any line has
+
+        def drawn(k: int) -> bool:
+            pts = np.stack([np.full_like(t, k), t], -1) if axis == 0 else np.stack([t, np.full_like(t, k)], -1)
+            px = np.rint(_apply(H, pts)).astype(int)
+            ok = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+            return bool(ok.any()) and float((near[px[ok, 1], px[ok, 0]] > 0).mean()) >= 0.6
+
+        while hi - lo >= 1 and not drawn(lo):
+            lo += 1
+        while hi - lo >= 1 and not drawn(hi):
+            hi -= 1
+        return int(lo), int(hi)
+
     @staticmethod
     def _extension(H: np.ndarray, near: np.ndarray, axis: int, at: int, outwards: int, lo: int, hi: int) -> float:
         """How far (in cells) the lattice lines that cross lattice line ``at`` run on past it
@@ -636,12 +725,33 @@ class BoardReader:
         rect = _remove_grid_lines(rect, n, s, o, max(0.12, 0.4 * line_ref))
         thr = max(0.1, 0.25 * line_ref)
         mg = s // 4
+        # peak darkness per cell: the largest 3 x 3 mean (robust to single noisy pixels)
+        box = cv2.blur(rect[o:o + n * s, o:o + n * s], (3, 3))
+        peaks = box.reshape(n, s, n, s).max(axis=(1, 3))
         feats = np.zeros((n, n, len(_FEATURES)))
         for r in range(n):
             for c in range(n):
                 y0, x0 = o + r * s - mg, o + c * s - mg
-                feats[r, c] = cell_features(rect[y0:y0 + s + 2 * mg, x0:x0 + s + 2 * mg], thr, mg)
+                feats[r, c] = cell_features(rect[y0:y0 + s + 2 * mg, x0:x0 + s + 2 * mg], thr, mg,
+                                            float(peaks[r, c]), 0.25 * line_ref)
         return _probabilities(feats, line_ref), feats
+
+
+def _quadratic_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares ``y = a + b x + c x^2`` by the normal equations (no BLAS call: these
+    are tiny and run dozens of times per frame)."""
+    if len(x) < 3:
+        return (float(np.mean(y)) if len(y) else 0.0, 0.0, 0.0)
+    x2 = x * x
+    s0, s1, s2, s3, s4 = float(len(x)), float(x.sum()), float(x2.sum()), float((x2 * x).sum()), float((x2 * x2).sum())
+    t0, t1, t2 = float(y.sum()), float((x * y).sum()), float((x2 * y).sum())
+    det = s0 * (s2 * s4 - s3 * s3) - s1 * (s1 * s4 - s3 * s2) + s2 * (s1 * s3 - s2 * s2)
+    if abs(det) < 1e-12:
+        return (t0 / s0, 0.0, 0.0)
+    a = (t0 * (s2 * s4 - s3 * s3) - s1 * (t1 * s4 - s3 * t2) + s2 * (t1 * s3 - s2 * t2)) / det
+    b = (s0 * (t1 * s4 - s3 * t2) - t0 * (s1 * s4 - s3 * s2) + s2 * (s1 * t2 - t1 * s2)) / det
+    c = (s0 * (s2 * t2 - t1 * s3) - s1 * (s1 * t2 - t1 * s2) + t0 * (s1 * s3 - s2 * s2)) / det
+    return a, b, c
 
 
 def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float) -> np.ndarray:
@@ -675,21 +785,24 @@ def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float)
             rows = np.flatnonzero(on)
             centre = arg[rows] + lo
             keep = np.ones(len(rows), bool)
-            for _ in range(3):
-                coef = np.polyfit(ys[rows[keep]], centre[keep], 2)
-                res = centre - np.polyval(coef, ys[rows])
-                keep = np.abs(res) <= 2.0
+            yr = ys[rows] / side
+            for _ in range(3):  # quadratic track, refitted without the rows that stray
+                coef = _quadratic_fit(yr[keep], centre[keep])
+                fitted = coef[0] + yr * (coef[1] + yr * coef[2])
+                keep = np.abs(centre - fitted) <= 2.0
                 if keep.sum() < 0.3 * len(rows):
                     break
             if keep.sum() < 0.7 * n * s:  # no straight line along most of the field: symbols only
                 continue
-            track = np.polyval(coef, ys)
+            track = np.zeros(side)
+            track[rows] = fitted
             width = (band[rows[keep]] > 0.5 * peak[rows[keep], None]).sum(axis=1) if keep.any() else np.array([3])
             half = 0.5 * float(np.median(width)) + 1.5
-            c0 = np.clip(np.floor(track[rows] - half).astype(int), 0, side)
-            c1 = np.clip(np.ceil(track[rows] + half).astype(int) + 1, 0, side)
-            for r, a, e in zip(rows.tolist(), c0.tolist(), c1.tolist()):
-                dst[r, a:e] = 0.0
+            cols = np.arange(lo, hi)
+            blank = np.abs(cols[None, :] - track[rows, None]) <= half
+            sub = dst[rows, lo:hi]
+            sub[blank] = 0.0
+            dst[rows, lo:hi] = sub
     return out
 
 
