@@ -56,7 +56,7 @@ __all__ = [
     "NoBoardError",
     "VisionError",
     "ink_map",
-    "cell_features",
+    "board_features",
     "debug_image",
 ]
 
@@ -127,14 +127,14 @@ def ink_map(image: object, stroke_px: float = 12.0) -> np.ndarray:
     edge therefore does not turn into a line of ink.
     """
     rgb = _as_rgb(image)
-    y = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    y8 = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
     k = 2 * int(math.ceil(stroke_px)) + 1
     # replicate the border first: a sliver of dark table along the image edge would
-    # otherwise look like a stroke
-    padded = cv2.copyMakeBorder(y, k, k, k, k, cv2.BORDER_REPLICATE)
+    # otherwise look like a stroke (8-bit morphology: several times faster than float)
+    padded = cv2.copyMakeBorder(y8, k, k, k, k, cv2.BORDER_REPLICATE)
     bg = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)))[k:-k, k:-k]
-    d = 1.0 - y / np.maximum(bg, 8.0)
-    return np.clip(d, 0.0, 1.0)
+    d = 1.0 - y8.astype(np.float32) / np.maximum(bg, 8).astype(np.float32)
+    return np.clip(d, 0.0, 1.0, out=d)
 
 
 # ------------------------------------------------------------------ lines
@@ -231,13 +231,13 @@ def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
 
 
 def _refit(ln: _Line, ink: np.ndarray, floor: float, band: float) -> _Line | None:
-    """The line refitted to the full-resolution ink map around it: every 2 px along the line
+    """The line refitted to the full-resolution ink map around it: every 3 px along the line
     (and a little past its ends), the darkness-weighted centre of the ink within ``band`` px
     across it, then a weighted total-least-squares line through those centres. None if no
     ink is there."""
     h, w = ink.shape
     length = float(np.linalg.norm(ln.p1 - ln.p0))
-    t = np.arange(-band, length + band + 1.0, 2.0)
+    t = np.arange(-band, length + band + 1.0, 3.0)
     u = np.arange(-math.ceil(band), math.ceil(band) + 1.0)
     pts = ln.p0[None, None, :] + t[:, None, None] * ln.direction + u[None, :, None] * ln.normal
     x = np.clip(np.rint(pts[..., 0]).astype(np.intp), 0, w - 1)
@@ -300,77 +300,97 @@ def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
 _FEATURES = ("peak", "ink", "hollow", "hole", "extent", "elongation", "spread")
 
 
-def cell_features(patch: np.ndarray, threshold: float, margin: int, peak: float | None = None,
-                  min_peak: float = 0.0) -> np.ndarray:
-    """Features of one rectified cell: ``patch`` is the cell's darkness with ``margin`` px of
-    its neighbours around it (so a mark that crosses the cell's border stays whole) and its
-    grid lines already removed.
+def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, min_peak: float) -> np.ndarray:
+    """Features ``(n, n, 7)`` of every cell at once, from the rectified darkness map with
+    the grid lines removed (cells ``s`` px, the field ``o`` px in from the map's edge).
 
-    * ``peak``: 99th percentile of the darkness inside the cell (is there real ink at all?).
-    * ``ink``: the mark's ink area relative to the cell. The mark is the ink (darker than
-      ``threshold`` and than half the peak) in connected pieces of at least 1.5 % of the cell
-      whose centre lies inside the cell.
-    * ``hollow``: how empty the mark's middle is. The ink pixels are whitened by their own
-      second moments (an oval O becomes a ring, whatever its size, tilt or aspect), and this
-      is 1 minus the share of ink within 0.45 of the median whitened radius, scaled so that
-      ink spread evenly from the centre out (an X's strokes) gives 0 and a ring gives 1.
-    * ``hole``: area of the largest background region enclosed by the mark (after closing
-      small gaps), relative to the mark's bounding box (an O encloses one).
+    * ``peak``: the darkest 3 x 3 mean inside the cell (is there real ink at all?).
+    * ``ink``: the mark's ink area relative to the cell. The mark is the ink darker than
+      ``threshold`` and than half the cell's peak, in connected pieces of at least 1.5 % of
+      a cell whose centre lies in the cell (so a mark that crosses the border stays whole,
+      and a neighbour's that reaches in does not count). Cells whose peak is below
+      ``min_peak`` hold no real ink.
+    * ``hollow``: how empty the mark's middle is: 1 minus the ink share of the region within
+      0.4 whitened units of the ink's centroid (whitened by the ink's own second moments, so
+      that an oval O of any size, tilt or aspect becomes a ring). An X crosses there.
+    * ``hole``: the largest background region enclosed by the mark (after closing small
+      gaps), relative to the mark's bounding box. An O encloses one.
     * ``extent``: the mark's bounding-box size relative to the cell.
     * ``elongation``: the square root of the ratio of the ink's principal second moments:
       about 1 for an X or an O, large for a stray straight stroke (the end of a grid line).
     * ``spread``: the coefficient of variation of the ink's whitened distance from its
       centroid: small for a ring (an O, closed or not), large for strokes that run from the
       middle out (an X, also a lopsided one whose crossing is off its centre).
-
-    ``peak`` may be passed in when known; a cell whose peak is below ``min_peak`` holds no
-    real ink and returns at once.
     """
-    size = patch.shape[0] - 2 * margin
-    if peak is None:
-        peak = float(np.percentile(patch[margin:margin + size, margin:margin + size], 99))
-    if peak < min_peak:
-        return np.array([peak, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
-    m = (patch > max(threshold, 0.5 * peak)).astype(np.uint8)
+    cells = n * n
+    side = rect.shape[0]
+    peaks = cv2.blur(rect[o:o + n * s, o:o + n * s], (3, 3)).reshape(n, s, n, s).max(axis=(1, 3))
+    out = np.zeros((n, n, 7))
+    out[..., 0], out[..., 5] = peaks, 1.0
+    idx = np.clip((np.arange(side) - o) // s, 0, n - 1)
+    thr = np.maximum(threshold, 0.5 * peaks)[idx[:, None], idx[None, :]]
+    m = (rect > thr).astype(np.uint8)
     n_lab, lab, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8)
-    lo, hi = margin - 0.5, margin + size - 0.5
-    keep = np.zeros(n_lab, bool)
-    keep[1:] = ((stats[1:, cv2.CC_STAT_AREA] >= max(4, int(0.015 * size * size)))
-                & (cents[1:, 0] > lo) & (cents[1:, 0] < hi) & (cents[1:, 1] > lo) & (cents[1:, 1] < hi))
+    col, row = np.floor((cents[:, 0] - o + 0.5) / s).astype(int), np.floor((cents[:, 1] - o + 0.5) / s).astype(int)
+    comp_cell = np.where((col >= 0) & (col < n) & (row >= 0) & (row < n), row * n + col, -1)
+    comp_cell[stats[:, cv2.CC_STAT_AREA] < max(4, int(0.015 * s * s))] = -1
+    comp_cell[0] = -1
+    ok_cell = peaks.ravel() >= min_peak
+    comp_cell[(comp_cell >= 0) & ~ok_cell[np.maximum(comp_cell, 0)]] = -1
+    ys, xs = np.nonzero(lab)
+    cell = comp_cell[lab[ys, xs]]
+    keep = cell >= 0
     if not keep.any():
-        return np.array([peak, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
-    m = keep[lab].astype(np.uint8)
-    ys, xs = np.nonzero(m)
-    ink = len(xs) / float(size * size)
-    x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
-    bw, bh = x1 - x0 + 1, y1 - y0 + 1
-    extent = max(bw, bh) / size
-    # the middle of the mark, in whitened units (an O's hole spans more than 0.4 of them):
-    # points p with (p - mu)' C^-1 (p - mu) < 0.4^2, C the ink's covariance
-    mx, my = float(xs.mean()), float(ys.mean())
-    dx, dy = xs - mx, ys - my
-    cxx, cxy, cyy = float((dx * dx).mean()) + 1e-6, float((dx * dy).mean()), float((dy * dy).mean()) + 1e-6
+        return out
+    ys, xs, cell = ys[keep].astype(np.float64), xs[keep].astype(np.float64), cell[keep]
+    cnt = np.bincount(cell, minlength=cells).astype(np.float64)
+    has = cnt > 0
+    c1 = np.maximum(cnt, 1.0)
+    mx, my = np.bincount(cell, xs, cells) / c1, np.bincount(cell, ys, cells) / c1
+    dx, dy = xs - mx[cell], ys - my[cell]
+    cxx = np.bincount(cell, dx * dx, cells) / c1 + 1e-6
+    cyy = np.bincount(cell, dy * dy, cells) / c1 + 1e-6
+    cxy = np.bincount(cell, dx * dy, cells) / c1
     det = cxx * cyy - cxy * cxy
     half_tr = 0.5 * (cxx + cyy)
-    root = math.sqrt(max(half_tr * half_tr - det, 0.0))
-    elongation = math.sqrt((half_tr + root) / max(half_tr - root, 1e-6))
-    # whitened radius r^2 = d' C^-1 d of every ink pixel
-    r = np.sqrt(np.maximum((cyy * dx * dx - 2 * cxy * dx * dy + cxx * dy * dy) / det, 0.0))
-    spread = float(r.std() / max(float(r.mean()), 1e-6))
-    gx = (np.arange(x0, x1 + 1) - mx)[None, :]
-    gy = (np.arange(y0, y1 + 1) - my)[:, None]
-    middle = (cyy * gx * gx - 2 * cxy * gx * gy + cxx * gy * gy) < 0.16 * det
-    fill = float(m[y0:y1 + 1, x0:x1 + 1][middle].mean()) if middle.any() else 0.0
-    hollow = float(np.clip(1.0 - fill, 0.0, 1.0))
-    # enclosed background: flood the outside of the (gap-closed) mark from the border
-    ck = max(3, int(round(0.08 * size)) | 1)
-    closed = cv2.morphologyEx(m, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ck, ck)))
+    root = np.sqrt(np.maximum(half_tr * half_tr - det, 0.0))
+    elong = np.sqrt((half_tr + root) / np.maximum(half_tr - root, 1e-6))
+    r = np.sqrt(np.maximum((cyy[cell] * dx * dx - 2 * cxy[cell] * dx * dy + cxx[cell] * dy * dy) / det[cell], 0.0))
+    r_mean = np.bincount(cell, r, cells) / c1
+    r_var = np.maximum(np.bincount(cell, r * r, cells) / c1 - r_mean ** 2, 0.0)
+    spread = np.sqrt(r_var) / np.maximum(r_mean, 1e-6)
+    # ink within 0.4 whitened units of the centroid, over that region's area in pixels
+    middle_area = np.pi * 0.16 * np.sqrt(det)
+    fill = np.bincount(cell, (r < 0.4).astype(np.float64), cells) / np.maximum(middle_area, 1.0)
+    x0, y0 = np.full(cells, np.inf), np.full(cells, np.inf)
+    x1, y1 = np.full(cells, -np.inf), np.full(cells, -np.inf)
+    np.minimum.at(x0, cell, xs)
+    np.minimum.at(y0, cell, ys)
+    np.maximum.at(x1, cell, xs)
+    np.maximum.at(y1, cell, ys)
+    bw, bh = np.where(has, x1 - x0 + 1, 0), np.where(has, y1 - y0 + 1, 0)
+    # enclosed background: flood the outside of the (gap-closed) marks from the border
+    marks = np.zeros_like(m)
+    marks[ys.astype(int), xs.astype(int)] = 1
+    ck = max(3, int(round(0.08 * s)) | 1)
+    closed = cv2.morphologyEx(marks, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ck, ck)))
     flood = cv2.copyMakeBorder(closed, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
     cv2.floodFill(flood, None, (0, 0), 2)
-    enclosed = (flood[1:-1, 1:-1] == 0).astype(np.uint8)
-    n_h, _, st_h, _ = cv2.connectedComponentsWithStats(enclosed, connectivity=4)
-    hole = float(st_h[1:, cv2.CC_STAT_AREA].max()) / float(bw * bh) if n_h > 1 else 0.0
-    return np.array([peak, ink, hollow, hole, extent, elongation, spread])
+    n_h, _, st_h, c_h = cv2.connectedComponentsWithStats((flood[1:-1, 1:-1] == 0).astype(np.uint8), connectivity=4)
+    hole = np.zeros(cells)
+    if n_h > 1:
+        hc, hr = np.floor((c_h[1:, 0] - o + 0.5) / s).astype(int), np.floor((c_h[1:, 1] - o + 0.5) / s).astype(int)
+        inside = (hc >= 0) & (hc < n) & (hr >= 0) & (hr < n)
+        np.maximum.at(hole, (hr * n + hc)[inside], st_h[1:, cv2.CC_STAT_AREA][inside].astype(np.float64))
+        hole = hole / np.maximum(bw * bh, 1.0)
+    f = out.reshape(cells, 7)
+    f[has, 1] = cnt[has] / float(s * s)
+    f[has, 2] = np.clip(1.0 - fill[has], 0.0, 1.0)
+    f[has, 3] = hole[has]
+    f[has, 4] = np.maximum(bw, bh)[has] / s
+    f[has, 5] = elong[has]
+    f[has, 6] = spread[has]
+    return out
 
 
 def _probabilities(f: np.ndarray, ref: float) -> np.ndarray:
@@ -404,14 +424,17 @@ class BoardReader:
         size: 3 or 5 cells a side, or None to decide from the number of grid lines.
         cell_px: side of a rectified cell (px) for the cell features.
         max_side_px: larger images are shrunk to this longer side first (speed).
+        grid_px: the grid is searched on a copy shrunk to about this longer side.
     """
 
-    def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800) -> None:
+    def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
+                 grid_px: int = 400) -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         self.size = size
         self.cell_px = int(cell_px)
         self.max_side_px = int(max_side_px)
+        self.grid_px = int(grid_px)
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
@@ -428,9 +451,18 @@ class BoardReader:
         h, w = rgb.shape[:2]
         diag = math.hypot(h, w)
         d = ink_map(rgb, stroke_px=max(6.0, diag / 100))
+        # the grid is found on a copy of about grid_px (long lines need no more), the cells
+        # are read at full resolution
+        g = max(1, int(round(max(h, w) / self.grid_px)))
+        dg = cv2.resize(d, (w // g, h // g), interpolation=cv2.INTER_AREA) if g > 1 else d
         if trace is not None:
-            trace["scale"] = scale
-        H, err, npts, frame, n, line_ref = self._find_grid(d, diag, trace)
+            trace["scale"] = scale / g
+        Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
+        H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
+        err *= g
+        line_ref, coverage = self._line_contrast(d, H, n)
+        if coverage < 0.6:
+            raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
         probs, feats = self._read_cells(d, H, n, line_ref)
         cells = probs.argmax(axis=-1)
         conf = probs.max(axis=-1)
@@ -441,7 +473,7 @@ class BoardReader:
 
     # -- grid ------------------------------------------------------------------------
     def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None
-                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, float]:
+                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int]:
         trace = {} if trace is None else trace
         h, w = d.shape
         t0 = max(0.18, float(np.percentile(d[::2, ::2], 99.5)) * 0.35)
@@ -450,7 +482,7 @@ class BoardReader:
             raise NoBoardError("the image holds no ink")
         # straight segments on a shrunk copy (Hough costs grow with the ink pixels), then
         # each merged line refitted to the full-resolution ink around it
-        f = max(1, int(round(max(h, w) / 400)))
+        f = max(1, int(round(max(h, w) / 400)))  # (1 when the caller already shrank it)
         small = cv2.resize(d, (w // f, h // f), interpolation=cv2.INTER_AREA) if f > 1 else d
         segs = _segments((small > 0.8 * t0).astype(np.uint8), 0.08 * diag / f) * f
         tol = 0.006 * diag + 2
@@ -502,11 +534,8 @@ class BoardReader:
         if side < 0.1 * diag:
             raise NoBoardError("the grid found is too small to read")
         c_frame, r_frame = (steps[0] == 0, steps[1] == 0), (steps[2] == 0, steps[3] == 0)
-        line_ref, coverage = self._line_contrast(d, H, n)
-        if coverage < 0.6:
-            raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
         frame = (c_frame[0], c_frame[1], r_frame[0], r_frame[1])
-        return H, err, len(src), frame, n, line_ref
+        return H, err, len(src), frame, n
 
     def _field_lines(self, fam: list[_Line], d: np.ndarray, floor: float, tol: float) -> list[_Line]:
         """The field's lines of one family, ordered across.
@@ -570,8 +599,11 @@ class BoardReader:
             raise NoBoardError("the grid lines do not intersect")
         best: tuple[float, np.ndarray, np.ndarray] | None = None
         unit = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
-        for a in range(len(cols) - 1):
-            for b in range(len(rows) - 1):
+        # the cells around the middle of the field (its stray lines sit at the ends)
+        mid_a = range(max(0, (len(cols) - 1) // 2 - 1), min(len(cols) - 1, (len(cols) - 1) // 2 + 2))
+        mid_b = range(max(0, (len(rows) - 1) // 2 - 1), min(len(rows) - 1, (len(rows) - 1) // 2 + 2))
+        for a in mid_a:
+            for b in mid_b:
                 quad = [_intersect(cols[a], rows[b]), _intersect(cols[a + 1], rows[b]),
                         _intersect(cols[a + 1], rows[b + 1]), _intersect(cols[a], rows[b + 1])]
                 if any(q is None for q in quad):
@@ -587,7 +619,7 @@ class BoardReader:
         if best is None:
             raise NoBoardError("the grid lines do not make a projective grid")
         _, inl, H = best
-        for _ in range(3):  # refine on the inliers, re-assign
+        for _ in range(2):  # refine on the inliers, re-assign
             Hinv = np.linalg.inv(H)
             L = _apply(Hinv, P)
             R = np.rint(L)
@@ -603,7 +635,8 @@ class BoardReader:
         inl = np.all(np.abs(L - R) < 0.2, axis=1)
         if inl.sum() < 4:
             raise NoBoardError("too few grid crossings fit one lattice")
-        nodes = np.unique(R[inl].astype(int), axis=0)
+        ij = R[inl].astype(np.int64)
+        nodes = np.array(sorted(set(map(tuple, ij.tolist()))), dtype=np.int64)
         res = _apply(H, R[inl]) - P[inl]
         return H, nodes, float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
 
@@ -616,12 +649,13 @@ class BoardReader:
         inl = np.all(np.abs(L - R) < 0.2, axis=1)
         if inl.sum() < 4:
             return None
-        nodes = np.unique(R[inl].astype(int), axis=0)
-        lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+        ij = R[inl].astype(np.int64)
+        lo, hi = ij.min(axis=0), ij.max(axis=0)
         if np.any(hi - lo > 8):
             return None
+        distinct = len(set(((ij[:, 0] - lo[0]) * 16 + ij[:, 1] - lo[1]).tolist()))
         box = int(np.prod(hi - lo + 1))
-        return len(nodes) - 0.5 * (box - len(nodes)), inl
+        return distinct - 0.5 * (box - distinct), inl
 
     def _border_steps(self, ext: list[float], span_c: int, span_r: int) -> tuple[list[int], int]:
         """Cells from the outermost lines to the border, per side (left, right, top, bottom),
@@ -723,17 +757,7 @@ class BoardReader:
         rect = cv2.warpPerspective(d, M, (side, side), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         rect = _remove_grid_lines(rect, n, s, o, max(0.12, 0.4 * line_ref))
-        thr = max(0.1, 0.25 * line_ref)
-        mg = s // 4
-        # peak darkness per cell: the largest 3 x 3 mean (robust to single noisy pixels)
-        box = cv2.blur(rect[o:o + n * s, o:o + n * s], (3, 3))
-        peaks = box.reshape(n, s, n, s).max(axis=(1, 3))
-        feats = np.zeros((n, n, len(_FEATURES)))
-        for r in range(n):
-            for c in range(n):
-                y0, x0 = o + r * s - mg, o + c * s - mg
-                feats[r, c] = cell_features(rect[y0:y0 + s + 2 * mg, x0:x0 + s + 2 * mg], thr, mg,
-                                            float(peaks[r, c]), 0.25 * line_ref)
+        feats = board_features(rect, n, s, o, max(0.1, 0.25 * line_ref), 0.25 * line_ref)
         return _probabilities(feats, line_ref), feats
 
 
@@ -769,13 +793,14 @@ def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float)
     b = max(2, s // 5)
     side = rect.shape[0]
     ys = np.arange(side, dtype=np.float64)
+    along = (cv2.blur(rect, (1, 9)), cv2.blur(rect, (9, 1)).T)  # smoothed along the lines of each family
     for transpose in (False, True):
-        img = rect.T if transpose else rect
         dst = out.T if transpose else out
+        smooth = along[int(transpose)]
         for i in range(n + 1):
             x = o + i * s
             lo, hi = max(0, x - b), min(side, x + b + 1)
-            band = cv2.blur(np.ascontiguousarray(img[:, lo:hi]), (1, 9))  # smoothed along the line
+            band = smooth[:, lo:hi]
             arg = band.argmax(axis=1)
             peak = band[np.arange(side), arg]
             on = peak > present
