@@ -276,7 +276,8 @@ def _crossing(fam: list[_Line], other: list[_Line], slack: float) -> list[_Line]
 
 def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
     """Split lines into the two grid directions: a length-weighted circular 2-means on the
-    doubled normal angle, seeded by the longest line."""
+    doubled normal angle, seeded by the longest line; lines more than 20 deg off their
+    family's mean direction are dropped."""
     if len(lines) < 2:
         return lines, []
     ang = np.array([2 * ln.theta for ln in lines])
@@ -291,8 +292,13 @@ def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
             break
         c0 = float(np.angle((wts[~lab] * np.exp(1j * ang[~lab])).sum()))
         c1 = float(np.angle((wts[lab] * np.exp(1j * ang[lab])).sum()))
-    fa = [ln for ln, k in zip(lines, lab) if not k]
-    fb = [ln for ln, k in zip(lines, lab) if k]
+    # perspective fans a family out by some degrees; a symbol's stroke runs at about 45 deg
+    # to both families and joins neither
+    d0 = np.abs(np.angle(np.exp(1j * (ang - c0)))) / 2
+    d1 = np.abs(np.angle(np.exp(1j * (ang - c1)))) / 2
+    limit = math.radians(20)
+    fa = [ln for ln, k, d in zip(lines, lab, d0) if not k and d <= limit]
+    fb = [ln for ln, k, d in zip(lines, lab, d1) if k and d <= limit]
     return fa, fb
 
 
@@ -460,9 +466,7 @@ class BoardReader:
         Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
         H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
         err *= g
-        line_ref, coverage = self._line_contrast(d, H, n)
-        if coverage < 0.6:
-            raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
+        line_ref, _ = self._line_contrast(d, H, n)
         probs, feats = self._read_cells(d, H, n, line_ref)
         cells = probs.argmax(axis=-1)
         conf = probs.max(axis=-1)
@@ -474,9 +478,24 @@ class BoardReader:
     # -- grid ------------------------------------------------------------------------
     def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None
                    ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int]:
+        """The field's homography (grid cells -> px), fit error, crossings used, frame sides
+        and size. Ink is "dark" above a share of the image's darkest strokes; if no grid
+        shows at that share, a lower one is tried (a light, thin field next to bold marks)."""
         trace = {} if trace is None else trace
+        top = float(np.percentile(d[::2, ::2], 99.5))
+        try:
+            return self._find_grid_at(d, diag, max(0.18, 0.35 * top), trace)
+        except NoBoardError as first:
+            if 0.25 * top < 0.15:
+                raise
+            try:
+                return self._find_grid_at(d, diag, 0.25 * top, trace)
+            except NoBoardError:
+                raise first from None
+
+    def _find_grid_at(self, d: np.ndarray, diag: float, t0: float, trace: dict[str, object]
+                      ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int]:
         h, w = d.shape
-        t0 = max(0.18, float(np.percentile(d[::2, ::2], 99.5)) * 0.35)
         mask = (d > t0).astype(np.uint8)
         if mask.mean() < 1e-4:
             raise NoBoardError("the image holds no ink")
@@ -511,7 +530,23 @@ class BoardReader:
             rows.reverse()
         trace["cols"], trace["rows"] = cols, rows
         near = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_RECT, (5, 5)))
-        Hl, nodes, err = self._lattice(cols, rows)
+        # the best lattice from the cells around the middle first; if no field follows from
+        # it (a stray line took part), the next best lattices from every cell
+        failure: NoBoardError | None = None
+        tried = 0
+        for Hl, nodes, err in self._lattices(cols, rows):
+            try:
+                return self._field(Hl, nodes, err, d, near, diag, trace)
+            except NoBoardError as exc:
+                failure = failure or exc
+            tried += 1
+            if tried >= 6:
+                break
+        raise failure or NoBoardError("the grid lines do not make a projective grid")
+
+    def _field(self, Hl: np.ndarray, nodes: np.ndarray, err: float, d: np.ndarray, near: np.ndarray, diag: float,
+               trace: dict[str, object]) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int]:
+        """The field that a lattice implies: its extent, border and size (or NoBoardError)."""
         (i0, j0), (i1, j1) = nodes.min(axis=0), nodes.max(axis=0)
         # the outermost lattice lines must be drawn along their length: a line of symbol
         # strokes that happens to fall on the lattice is not (its ink covers little of it)
@@ -533,8 +568,10 @@ class BoardReader:
         side = math.sqrt(max(cv2.contourArea(corners.astype(np.float32)), 0.0))
         if side < 0.1 * diag:
             raise NoBoardError("the grid found is too small to read")
-        c_frame, r_frame = (steps[0] == 0, steps[1] == 0), (steps[2] == 0, steps[3] == 0)
-        frame = (c_frame[0], c_frame[1], r_frame[0], r_frame[1])
+        _, coverage = self._line_contrast(d, H, n)
+        if coverage < 0.6:
+            raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
+        frame = (steps[0] == 0, steps[1] == 0, steps[2] == 0, steps[3] == 0)
         return H, err, len(src), frame, n
 
     def _field_lines(self, fam: list[_Line], d: np.ndarray, floor: float, tol: float) -> list[_Line]:
@@ -556,6 +593,9 @@ class BoardReader:
         longest = max(ln.length for ln in fam)
         long_pos = [p for ln, p in zip(fam, pos) if ln.length >= 0.45 * longest]
         typical = float(np.median(np.diff(long_pos))) if len(long_pos) > 1 else longest
+        gaps = np.diff(long_pos)
+        if len(gaps) > 1 and (gaps > 0.35 * typical).sum() >= 1:  # double detections shrink the median
+            typical = float(np.median(gaps[gaps > 0.35 * typical]))
         groups: list[list[_Line]] = []
         last = -math.inf
         for ln, p in zip(fam, pos):
@@ -581,29 +621,32 @@ class BoardReader:
         best = max(ln.length for ln in merged)
         return [ln for ln in merged if ln.length >= 0.45 * best]
 
-    def _lattice(self, cols: list[_Line], rows: list[_Line]) -> tuple[np.ndarray, np.ndarray, float]:
-        """Fit the grid lattice to the line crossings: ``(H, nodes, rms)``, H taking lattice
-        coordinates (cells) to pixels, ``nodes`` the integer lattice points that crossings
-        support and ``rms`` the crossings' distance from them (px).
+    def _lattices(self, cols: list[_Line], rows: list[_Line]):  # type: ignore[no-untyped-def]
+        """Lattices fitted to the line crossings, best first: ``(H, nodes, rms)``, H taking
+        lattice coordinates (cells) to pixels, ``nodes`` the integer lattice points that
+        crossings support and ``rms`` the crossings' distance from them (px).
 
         Every cell made by two neighbouring column lines and two neighbouring row lines is a
         hypothesis; it predicts the whole lattice, and scores by the crossings that fall on
         lattice points (within a fifth of a cell) less half the lattice points inside the
         supported range that no crossing supports - so a stray line between two real ones,
-        which would halve the spacing, loses. The best is refined on its inliers.
+        which would halve the spacing, loses. The cells around the middle come first (stray
+        lines sit at the ends); each hypothesis is refined on its inliers.
         """
         P = np.array([[p if (p := _intersect(a, b)) is not None else (np.nan, np.nan) for b in rows] for a in cols],
                      dtype=np.float64).reshape(-1, 2)
         P = P[np.all(np.isfinite(P), axis=1)]
         if len(P) < 4:
             raise NoBoardError("the grid lines do not intersect")
-        best: tuple[float, np.ndarray, np.ndarray] | None = None
         unit = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
-        # the cells around the middle of the field (its stray lines sit at the ends)
         mid_a = range(max(0, (len(cols) - 1) // 2 - 1), min(len(cols) - 1, (len(cols) - 1) // 2 + 2))
         mid_b = range(max(0, (len(rows) - 1) // 2 - 1), min(len(rows) - 1, (len(rows) - 1) // 2 + 2))
-        for a in mid_a:
-            for b in mid_b:
+        middle = [(a, b) for a in mid_a for b in mid_b]
+        rest = [(a, b) for a in range(len(cols) - 1) for b in range(len(rows) - 1) if (a, b) not in middle]
+        seen: list[np.ndarray] = []
+        for group in (middle, rest):
+            scored_all = []
+            for a, b in group:
                 quad = [_intersect(cols[a], rows[b]), _intersect(cols[a + 1], rows[b]),
                         _intersect(cols[a + 1], rows[b + 1]), _intersect(cols[a], rows[b + 1])]
                 if any(q is None for q in quad):
@@ -614,14 +657,23 @@ class BoardReader:
                 except (cv2.error, np.linalg.LinAlgError):
                     continue
                 scored = self._score_lattice(Hinv, P)
-                if scored is not None and (best is None or scored[0] > best[0]):
-                    best = (scored[0], scored[1], H0)
-        if best is None:
-            raise NoBoardError("the grid lines do not make a projective grid")
-        _, inl, H = best
+                if scored is not None:
+                    scored_all.append((scored[0], H0))
+            scored_all.sort(key=lambda t: -t[0])
+            for _, H0 in scored_all:
+                fit = self._refine_lattice(H0, P)
+                if fit is None:
+                    continue
+                key = np.rint(_apply(fit[0], np.array([[0.0, 0.0], [1.0, 1.0]]))).ravel()
+                if any(np.abs(key - k).max() < 3 for k in seen):  # the same lattice again
+                    continue
+                seen.append(key)
+                yield fit
+
+    @staticmethod
+    def _refine_lattice(H: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
         for _ in range(2):  # refine on the inliers, re-assign
-            Hinv = np.linalg.inv(H)
-            L = _apply(Hinv, P)
+            L = _apply(np.linalg.inv(H), P)
             R = np.rint(L)
             inl = np.all(np.abs(L - R) < 0.2, axis=1)
             if inl.sum() < 4:
@@ -634,7 +686,7 @@ class BoardReader:
         R = np.rint(L)
         inl = np.all(np.abs(L - R) < 0.2, axis=1)
         if inl.sum() < 4:
-            raise NoBoardError("too few grid crossings fit one lattice")
+            return None
         ij = R[inl].astype(np.int64)
         nodes = np.array(sorted(set(map(tuple, ij.tolist()))), dtype=np.int64)
         res = _apply(H, R[inl]) - P[inl]
