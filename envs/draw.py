@@ -205,3 +205,30 @@ def save_rgb(img: np.ndarray, path: str | Path) -> Path:
     if not cv2.imwrite(str(out), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
         raise OSError(f"could not write image {out}")
     return out
+
+
+def draw_climb(holes: HoleMap, goal: int, pose: object, q: object, geom: ClimberGeometry, estimate: object,
+               candidates: Sequence[int], mask: np.ndarray, k: int, caption: Sequence[str] = (),
+               height_px: int = 560) -> np.ndarray:
+    """One frame of a climb (RGB array): the wall's holes, the goal hole (gold ring), the
+    candidate holes numbered (green where some arm may go, grey where none may), the robot
+    at its true pose and a ghost at the pose the localiser estimates, and a caption."""
+    xy = holes.xy
+    lo, hi = xy.min(axis=0) - 12.0, xy.max(axis=0) + 12.0
+    scale = max(1.5, min(10.0, height_px / float(hi[1] - lo[1])))
+    canvas = Canvas(float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]), scale)
+    canvas.image = np.ascontiguousarray(canvas.image)
+    for p in xy:
+        canvas.circle(p, 0.8, (150, 150, 150), fill=False, width=0.2)
+    canvas.circle(xy[goal], 2.2, (230, 170, 20), fill=False, width=0.6)
+    for i, h in enumerate(candidates):
+        ok = bool(mask[[arm * k + i for arm in range(3)]].any())
+        col = (40, 160, 60) if ok else (170, 170, 170)
+        canvas.circle(xy[h], 1.3, col, fill=False, width=0.35)
+        canvas.text(xy[h], str(i), col, size=0.35, offset_px=(5, -5))
+    est = np.asarray(estimate, dtype=np.float64)
+    draw_climber(canvas, est, q, geom, alpha=0.3, label=False)
+    draw_climber(canvas, pose, q, geom, alpha=1.0, label=False)
+    canvas.circle(est[:2], 0.6, (220, 60, 60), fill=True)
+    canvas.caption(list(caption))
+    return canvas.image

@@ -36,6 +36,7 @@ from .errors import InvalidInputError, UnreachableError, as_array
 __all__ = [
     "ClimberGeometry",
     "CLIMBER_SCHEMA",
+    "CLIMBER_PHYSICS_SCHEMA",
     "hand_positions",
     "elbow_positions",
     "arm_ik",
@@ -50,6 +51,32 @@ _ARM_SCHEMA = {
     "shoulder_offset_cm": _configs.Vector(length=2, default=[0.0, 0.0]),
 }
 
+#: The robot's masses, servos, grippers and encoders (used by :mod:`envs.sim.climber`; the
+#: kinematics only validates them, so one YAML file describes the whole robot).
+CLIMBER_PHYSICS_SCHEMA: dict[str, _configs.Spec] = {
+    "body_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.6),
+    "upper_link_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.08),
+    "lower_link_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.06),
+    "hand_mass_kg": _configs.Number(lo=0.0, default=0.06),
+    "body_radius_cm": _configs.Number(lo=0.0, lo_open=True, default=5.0),
+    "shoulder_torque_ncm": _configs.Number(lo=0.0, lo_open=True, default=200.0),
+    "elbow_torque_ncm": _configs.Number(lo=0.0, lo_open=True, default=200.0),
+    "servo_gain_per_s": _configs.Number(lo=0.0, lo_open=True, default=12.0, doc="position loop gain (1/s)"),
+    "servo_speed_dps": _configs.Number(lo=0.0, lo_open=True, default=90.0, doc="servo speed limit (deg/s)"),
+    "servo_stiffness_ncm_per_deg": _configs.Number(lo=0.0, lo_open=True, default=40.0,
+                                                   doc="torque a servo may use per degree of error"),
+    "capture_radius_cm": _configs.Number(lo=0.0, lo_open=True, default=0.8),
+    "holding_force_n": _configs.Number(lo=0.0, lo_open=True, default=40.0),
+    "reach_margin_cm": _configs.Number(lo=0.0, default=0.5),
+    "torque_safety": _configs.Number(lo=0.0, lo_open=True, hi=2.0, default=0.85),
+    "stall_s": _configs.Number(lo=0.0, lo_open=True, default=0.3, doc="a servo at its limit this long stalls (s)"),
+    "shift_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=4.0),
+    "swing_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=8.0),
+    "encoder_step_deg": _configs.Number(lo=0.0, default=0.05, doc="quantisation step (0 = none)"),
+    "physics_hz": _configs.Number(lo=30.0, hi=5000.0, default=240.0),
+}
+
+
 CLIMBER_SCHEMA: dict[str, _configs.Spec] = {
     "name": _configs.Text(default="climber"),
     "description": _configs.Text(default=""),
@@ -59,6 +86,7 @@ CLIMBER_SCHEMA: dict[str, _configs.Spec] = {
                                         item=_configs.Number(lo=0.0, hi=360.0),
                                         doc="allowed elbow angle (between the links)"),
     "sensor_sigma_deg": _configs.Number(lo=0.0, default=0.5, doc="encoder noise, 1 sigma"),
+    "physics": _configs.Section(fields=CLIMBER_PHYSICS_SCHEMA, default={}),
 }
 
 
