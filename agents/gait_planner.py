@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import heapq
 import itertools
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from envs.sim.climber import ClimberModel, MovePlan, min_enclosing_circle, plan_move
+from envs.sim.climber import ClimberModel, MovePlan, candidate_holes, plan_move, start_stances
 from kinematics.localization import HoleMap
 
-__all__ = ["GaitPlanner", "Route", "start_stances"]
+__all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
 
 Stance = tuple[int, int, int]
 
@@ -58,12 +57,19 @@ class GaitPlanner:
         holes: the wall.
         weight: A* weight ``w >= 1`` (1 = shortest routes, larger = faster search).
         heading: body heading the gait keeps (rad).
+        candidates: only moves to the ``candidates`` holes nearest the held holes
+            (:func:`envs.sim.climber.candidate_holes`, the environment's action set); None
+            allows every hole within reach.
     """
 
-    def __init__(self, model: ClimberModel, holes: HoleMap, weight: float = 2.0, heading: float = 0.0) -> None:
+    def __init__(self, model: ClimberModel, holes: HoleMap, weight: float = 2.0, heading: float = 0.0,
+                 candidates: int | None = None) -> None:
         if not weight >= 1.0:
             raise ValueError(f"weight={weight!r}; expected >= 1 (1 = optimal routes)")
+        if candidates is not None and candidates < 1:
+            raise ValueError(f"candidates={candidates!r}; expected >= 1 or None (every hole within reach)")
         self.model, self.holes, self.weight, self.heading = model, holes, float(weight), float(heading)
+        self.candidates = candidates
         self.span = 2.0 * max(model.reach[1])
         self._moves: dict[Stance, list[tuple[int, int, Stance, MovePlan]]] = {}
         self._hops: dict[int, list[int]] = {}
@@ -75,12 +81,16 @@ class GaitPlanner:
         if got is not None:
             return got
         xy = self.holes.xy
-        near = None
-        for h in st:  # holes within one span of all three held holes
-            ids = set(self.holes.within(xy[h], self.span).tolist())
-            near = ids if near is None else near & ids
+        if self.candidates is not None:  # the moves an agent in HoleClimb-v0 is offered
+            targets = sorted(candidate_holes(self.holes, st, self.candidates, self.span))
+        else:
+            near = None
+            for h in st:  # holes within one span of all three held holes
+                ids = set(self.holes.within(xy[h], self.span).tolist())
+                near = ids if near is None else near & ids
+            targets = sorted((near or set()) - set(st))
         out = []
-        for hole in sorted((near or set()) - set(st)):
+        for hole in targets:
             for arm in range(3):
                 plan = plan_move(self.model, self.holes, st, arm, hole, self.heading)
                 if isinstance(plan, MovePlan):
@@ -89,6 +99,11 @@ class GaitPlanner:
                     out.append((arm, hole, (nxt[0], nxt[1], nxt[2]), plan))
         self._moves[st] = out
         return out
+
+    def forbid(self, stance: Sequence[int], arm: int, hole: int) -> None:
+        """Drop a move that failed when tried (physics disagreed with the gait model)."""
+        st: Stance = (int(stance[0]), int(stance[1]), int(stance[2]))
+        self._moves[st] = [m for m in self.moves(st) if (m[0], m[1]) != (arm, hole)]
 
     def hops(self, goal: int) -> list[int]:
         """Per hole: hops to ``goal`` through holes at most one arm span apart (breadth-first;
@@ -161,19 +176,38 @@ class GaitPlanner:
         return Route(moves[::-1], stances[::-1], True, False, expanded)
 
 
-def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> list[Stance]:
-    """Stances near the bottom of the wall the robot can rest in (its three holes fit in its
-    reach), lowest first: the holes within ``rows`` spacings of the lowest hole."""
-    xy = holes.xy
-    y0 = float(xy[:, 1].min())
-    low = [i for i in range(len(holes)) if xy[i, 1] <= y0 + rows * holes.spacing]
-    reach = min(model.reach[1])
-    clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
-    out = []
-    for st in itertools.permutations(low, 3):
-        pts = [tuple(xy[h]) for h in st]
-        cx, cy, r = min_enclosing_circle(pts)
-        if r <= reach and all(math.hypot(px - cx, py - cy) >= clear for px, py in pts):
-            out.append((st[0], st[1], st[2]))
-    out.sort(key=lambda s: (sum(xy[h, 1] for h in s), s))
-    return out
+def find_route(model: ClimberModel, holes: HoleMap, start: Sequence[int], goal: int, candidates: int | None,
+               max_expansions: int = 3000) -> list[tuple[int, int]] | None:
+    """The moves of a route from ``start`` until an arm holds ``goal``, or None (the route
+    finder HoleClimb-v0 filters its walls with; a module-level function so envs pickle)."""
+    route = GaitPlanner(model, holes, candidates=candidates).plan(start, goal, max_expansions)
+    return route.moves if route.found else None
+
+
+class PlannerAgent:
+    """The planner as a HoleClimb-v0 policy (the baseline learned policies are compared
+    with): at every step it plans from the stance the robot believes it holds, through the
+    moves the env offers, and takes the first move. Replanning absorbs failed moves.
+
+    ``act(env, obs=None)`` takes the (unwrapped) env; ``None`` when no route exists from here.
+    """
+
+    def __init__(self, weight: float = 2.0, max_expansions: int = 3000) -> None:
+        self.weight, self.max_expansions = weight, max_expansions
+        self._planner: GaitPlanner | None = None
+        self._last: tuple[tuple[int, int, int], int, int] | None = None
+
+    def act(self, env: object, obs: object = None) -> int | None:
+        holes, model = env.holes, env.model  # type: ignore[attr-defined]
+        if self._planner is None or self._planner.holes is not holes or self._planner.model is not model:
+            self._planner = GaitPlanner(model, holes, self.weight, candidates=env.K)  # type: ignore[attr-defined]
+            self._last = None
+        stance = env.believed_stance  # type: ignore[attr-defined]
+        if self._last is not None and env.last_outcome != "ok" and self._last[0] == stance:  # type: ignore
+            self._planner.forbid(*self._last)  # that move failed here: plan round it
+        route = self._planner.plan(stance, env.goal, self.max_expansions)  # type: ignore[attr-defined]
+        if not route.found or not route.moves:
+            return None
+        arm, hole = route.moves[0]
+        self._last = (stance, arm, hole)
+        return env.action_for(arm, hole)  # type: ignore[attr-defined]

@@ -16,8 +16,9 @@ simulates each move in pymunk with torque-limited servos and grippers that let g
 ## Action Space
 
 ``Discrete(3 * K)`` (``K = candidates``, default 8): action ``a`` moves arm ``a // K``
-(0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the estimated
-body centre that the robot does not hold, nearest first. Actions the robot's own gait
+(0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the centroid of
+the holes the robot believes it holds, nearest first
+(:func:`envs.sim.climber.candidate_holes`). Actions the robot's own gait
 model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``
 (a stepped masked action is not an error: it fails as ``unreachable`` and costs a move).
 
@@ -51,8 +52,9 @@ fall. Plain Python floats.
 On ``reset(seed=...)`` a wall is made (``wall="generated"``: a jittered grid with missing
 holes, sizes from ``wall_kwargs``, all from the env's seeded generator; or a fixed wall from
 ``configs/walls``), the robot is put on a resting stance among the lowest holes, and the
-goal is a hole in the top row. Walls are accepted only if :class:`agents.gait_planner.GaitPlanner`
-finds a route; ``info["planner_moves"]`` says how many moves it needed.
+goal is a hole in the top row. Walls are accepted only if the ``route_finder`` finds a route
+through the actions the agent is offered (``gymnasium.make`` gives the env the gait planner,
+:func:`agents.gait_planner.find_route`); ``info["planner_moves"]`` says how many moves it needed.
 
 ## Episode End
 
@@ -63,7 +65,9 @@ falls (fewer than two grips). Truncated by ``max_episode_steps`` (200 moves when
 ## Arguments
 
 ``gymnasium.make("kinegym/HoleClimb-v0", mode="kinematic", wall="generated", robot="climber",
-candidates=8, wall_kwargs=None, render_mode=None)``. ``wall_kwargs`` (generated walls):
+candidates=8, wall_kwargs=None, render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
+``route_finder`` (without one walls are not checked: the env package does not import agents).
+``wall_kwargs`` (generated walls):
 ``cols`` (default (5, 8), an int or an inclusive range), ``rows`` ((8, 14)), ``spacing_cm``
 (15.0), ``jitter_cm`` (1.0), ``missing`` (0.08 share of holes left out). The seed's 20 cm
 wall needs ``robot="climber_long"`` (see the README: the seed robot's 10 cm links cannot
@@ -73,16 +77,30 @@ climb it with this gait).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.sim.climber import OUTCOMES, ClimberModel, KinematicClimber, MovePlan, PhysicsClimber, plan_move
+from envs.sim.climber import (
+    OUTCOMES,
+    ClimberModel,
+    KinematicClimber,
+    MovePlan,
+    PhysicsClimber,
+    candidate_holes,
+    plan_move,
+    start_stances,
+)
 from kinematics.localization import AmbiguousFixError, Fix, HoleMap, Localizer, NoFixError, NoiseModel
 
-__all__ = ["HoleClimbEnv", "WALL_DEFAULTS"]
+__all__ = ["HoleClimbEnv", "WALL_DEFAULTS", "RouteFinder"]
+
+#: ``(model, holes, start, goal, candidates) -> moves or None``: how walls are checked for a
+#: route (``agents.gait_planner.find_route`` when made with ``gymnasium.make``).
+RouteFinder = Callable[[ClimberModel, HoleMap, Sequence[int], int, int], "list[tuple[int, int]] | None"]
 
 WALL_DEFAULTS: dict[str, Any] = {"cols": (5, 8), "rows": (8, 14), "spacing_cm": 15.0, "jitter_cm": 1.0,
                                  "missing": 0.08}
@@ -95,7 +113,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
 
     def __init__(self, render_mode: str | None = None, mode: str = "kinematic", wall: str | HoleMap = "generated",
-                 robot: str = "climber", candidates: int = 8, wall_kwargs: dict[str, Any] | None = None) -> None:
+                 robot: str = "climber", candidates: int = 8, wall_kwargs: dict[str, Any] | None = None,
+                 route_finder: RouteFinder | None = None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; expected one of {self.metadata['render_modes']} or None")
         if mode not in ("kinematic", "physics"):
@@ -106,6 +125,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         if unknown:
             raise ValueError(f"wall_kwargs {sorted(unknown)} unknown; expected keys {sorted(WALL_DEFAULTS)}")
         self.render_mode, self.mode, self.K = render_mode, mode, candidates
+        self.route_finder = route_finder
         self.robot_name = robot
         self.model = ClimberModel.from_config(robot)
         self.wall_spec = wall
@@ -138,9 +158,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         return v
 
     def _make_wall(self) -> tuple[HoleMap, tuple[int, int, int], int, int]:
-        """A wall with a start stance, a goal hole and the planner's route length."""
-        from agents.gait_planner import GaitPlanner, start_stances
-
+        """A wall with a start stance, a goal hole and the route finder's route length
+        (-1 without a route finder: the wall is then not checked)."""
         for _ in range(30):
             if self._fixed_wall is not None:
                 holes = self._fixed_wall
@@ -157,16 +176,16 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             start = starts[int(self.np_random.integers(min(len(starts), 12)))]
             ys = holes.xy[:, 1]
             top = np.flatnonzero(ys >= ys.max() - 0.5 * holes.spacing)
-            goal = int(top[int(self.np_random.integers(len(top)))])
-            route = GaitPlanner(self.model, holes).plan(start, goal, max_expansions=3000)
-            if route.found:
-                return holes, start, goal, len(route.moves)
+            first = int(self.np_random.integers(len(top)))
+            goals = [int(top[first])] + ([int(g) for g in top if int(g) != int(top[first])]
+                                         if self._fixed_wall is not None else [])
+            for goal in goals:  # a fixed wall: the other top holes before giving up
+                if self.route_finder is None:
+                    return holes, start, goal, -1
+                route = self.route_finder(self.model, holes, start, goal, self.K)
+                if route is not None:
+                    return holes, start, goal, len(route)
             if self._fixed_wall is not None:
-                # a fixed wall: try the other top holes before giving up
-                for g in top:
-                    route = GaitPlanner(self.model, holes).plan(start, int(g), max_expansions=3000)
-                    if route.found:
-                        return holes, start, int(g), len(route.moves)
                 break
         name = getattr(self._fixed_wall, "name", "generated")
         raise RuntimeError(f"no route from the bottom to the top of wall '{name}' for robot '{self.robot_name}' "
@@ -264,15 +283,11 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         return float(math.hypot(g[0] - p[0], g[1] - p[1]))
 
     def _update_candidates(self) -> None:
-        """The K holes nearest the estimated centre that the robot does not hold, and which
-        arm may go to each (the robot's own gait model, judged on what it believes it holds)."""
+        """The K holes nearest the holes the robot believes it holds (not held), and which
+        arm may go to each (the robot's own gait model, judged on that belief)."""
         holes = self.holes
-        est = self._est_pose()
-        near = holes.within(est[:2], 2.0 * self.reach).tolist()  # type: ignore[union-attr]
-        held = set(self.est_holes)
-        near = [h for h in near if h not in held]
-        near.sort(key=lambda h: ((holes.xy[h, 0] - est[0]) ** 2 + (holes.xy[h, 1] - est[1]) ** 2, h))  # type: ignore
-        self.cand = (near[: self.K] + [-1] * self.K)[: self.K]
+        near = candidate_holes(holes, self.est_holes, self.K, 2.0 * self.reach)  # type: ignore[arg-type]
+        self.cand = (near + [-1] * self.K)[: self.K]
         mask = np.zeros(3 * self.K, dtype=bool)
         if self._plans_wall is not holes:
             self._plans, self._plans_wall = {}, holes
@@ -330,6 +345,20 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             "planner_moves": self.planner_moves,
             "wall": self.holes.name,  # type: ignore[union-attr]
         }
+
+    @property
+    def believed_stance(self) -> tuple[int, int, int]:
+        """The holes (map rows) the robot believes it holds - what its localiser says."""
+        return self.est_holes
+
+    @property
+    def candidates(self) -> list[int]:
+        """This step's candidate holes (map rows; -1 where there are fewer than K)."""
+        return list(self.cand)
+
+    def action_for(self, arm: int, hole: int) -> int | None:
+        """The action that moves ``arm`` (0..2) to ``hole`` (map row), None if not offered."""
+        return arm * self.K + self.cand.index(hole) if hole in self.cand else None
 
     def action_masks(self) -> np.ndarray:
         """Feasible actions (sb3-contrib's MaskablePPO calls this)."""

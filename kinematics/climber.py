@@ -69,7 +69,7 @@ CLIMBER_PHYSICS_SCHEMA: dict[str, _configs.Spec] = {
     "holding_force_n": _configs.Number(lo=0.0, lo_open=True, default=40.0),
     "reach_margin_cm": _configs.Number(lo=0.0, default=0.5),
     "torque_safety": _configs.Number(lo=0.0, lo_open=True, hi=2.0, default=0.85),
-    "stall_s": _configs.Number(lo=0.0, lo_open=True, default=0.3, doc="a servo at its limit this long stalls (s)"),
+    "stall_s": _configs.Number(lo=0.0, lo_open=True, default=0.5, doc="a servo at its limit this long stalls (s)"),
     "shift_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=4.0),
     "swing_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=8.0),
     "encoder_step_deg": _configs.Number(lo=0.0, default=0.05, doc="quantisation step (0 = none)"),

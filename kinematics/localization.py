@@ -69,6 +69,24 @@ class HoleMap:
     def __len__(self) -> int:
         return int(self.xy.shape[0])
 
+    @property
+    def xy_list(self) -> list[tuple[float, float]]:
+        """Hole positions as Python floats (cached): for scalar hot loops."""
+        got = self.__dict__.get("_xy_list")
+        if got is None:
+            got = [(float(a), float(b)) for a, b in self.xy.tolist()]
+            object.__setattr__(self, "_xy_list", got)
+        return got
+
+    @property
+    def id_list(self) -> list[tuple[int, int]]:
+        """Hole ids as Python tuples (cached)."""
+        got = self.__dict__.get("_id_list")
+        if got is None:
+            got = [(int(a), int(b)) for a, b in self.ids.tolist()]
+            object.__setattr__(self, "_id_list", got)
+        return got
+
     def index(self, hole_id: tuple[int, int]) -> int:
         """Row of hole ``(col, row)``; raises ``KeyError`` naming the id."""
         key = tuple(int(v) for v in hole_id)

@@ -43,6 +43,7 @@ Units: cm, kg, s, radians in the API; forces in N and torques in N cm in the con
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -65,6 +66,8 @@ __all__ = [
     "PhysicsClimber",
     "plan_move",
     "min_enclosing_circle",
+    "candidate_holes",
+    "start_stances",
 ]
 
 #: Move outcomes, in the order the observation encodes them.
@@ -91,7 +94,7 @@ class ClimberPhysics:
     holding_force_n: float = 40.0
     reach_margin_cm: float = 0.5
     torque_safety: float = 0.85
-    stall_s: float = 0.3
+    stall_s: float = 0.5
     shift_speed_cm_s: float = 4.0
     swing_speed_cm_s: float = 8.0
     encoder_step_deg: float = 0.05
@@ -113,12 +116,24 @@ class ClimberModel:
         phys = ClimberPhysics(**(cfg.get("physics") or {}))
         return cls(ClimberGeometry.from_config(name_or_path), phys)
 
+    def __post_init__(self) -> None:
+        g, m = self.geom, self.phys.reach_margin_cm
+        object.__setattr__(self, "_reach", ([float(abs(g.l1[i] - g.l2[i])) + m for i in range(3)],
+                                            [float(g.l1[i] + g.l2[i]) - m for i in range(3)]))
+        object.__setattr__(self, "_links", [(float(g.l1[i]), float(g.l2[i])) for i in range(3)])
+        object.__setattr__(self, "_offsets", [(float(g.shoulders[i, 0]), float(g.shoulders[i, 1])) for i in range(3)])
+
     @property
     def reach(self) -> tuple[list[float], list[float]]:
         """Per arm: inner and outer reach (cm) less the safety margin."""
-        g, m = self.geom, self.phys.reach_margin_cm
-        return ([float(abs(g.l1[i] - g.l2[i])) + m for i in range(3)],
-                [float(g.l1[i] + g.l2[i]) - m for i in range(3)])
+        return self._reach  # type: ignore[attr-defined]
+
+    def offsets(self, heading: float) -> list[tuple[float, float]]:
+        """Shoulder offsets in the wall frame for a body ``heading`` (cm)."""
+        if heading == 0.0:
+            return self._offsets  # type: ignore[attr-defined]
+        c, s = math.cos(heading), math.sin(heading)
+        return [(c * ox - s * oy, s * ox + c * oy) for ox, oy in self._offsets]  # type: ignore[attr-defined]
 
 
 # ------------------------------------------------------------------ geometry (scalar, fast)
@@ -213,7 +228,8 @@ def _cross(ax: float, ay: float, bx: float, by: float) -> float:
 
 
 def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Sequence[tuple[float, float]],
-                q: Sequence[tuple[float, float]], free: int, safety: float | None = None) -> tuple[float, float]:
+                q: Sequence[tuple[float, float]], free: int, safety: float | None = None,
+                hold: float | None = None) -> tuple[float, float]:
     """Static loads while arm ``free`` swings and the other two hold the body at ``pose``.
 
     Returns ``(worst torque ratio, largest gripper force in N)`` for the most favourable
@@ -226,19 +242,19 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
 
     With ``safety`` given, any split that keeps every servo within ``safety`` of its limit
     and every gripper within its holding force is taken instead of the best one (cheaper:
-    one pass over intervals), and ``(inf, inf)`` means there is none.
+    one pass over intervals), and ``(inf, inf)`` means there is none. ``hold`` overrides the
+    grippers' holding force (N).
     """
-    g, p = model.geom, model.phys
+    p = model.phys
     cx, cy, th = pose
-    c, s = math.cos(th), math.sin(th)
     w_up, w_low, w_hand = p.upper_link_mass_kg * G, p.lower_link_mass_kg * G, p.hand_mass_kg * G
+    offs = model.offsets(th)
+    links = model._links  # type: ignore[attr-defined]
     pts = []
     for k in range(3):
-        ox, oy = float(g.shoulders[k, 0]), float(g.shoulders[k, 1])
-        sx, sy = cx + c * ox - s * oy, cy + s * ox + c * oy
-        sk, ek = q[k]
-        a1 = th + sk
-        ex, ey = sx + g.l1[k] * math.cos(a1), sy + g.l1[k] * math.sin(a1)
+        sx, sy = cx + offs[k][0], cy + offs[k][1]
+        a1 = th + q[k][0]
+        ex, ey = sx + links[k][0] * math.cos(a1), sy + links[k][0] * math.sin(a1)
         pts.append((sx, sy, ex, ey, hands[k][0], hands[k][1]))
     # the free arm hangs from its shoulder: its weight and moment act on the body
     sx, sy, ex, ey, hx, hy = pts[free]
@@ -292,7 +308,7 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
     if safety is None:
         t_best = _minimax_line(norm)
     else:
-        t_best = _feasible_split(norm, grips, safety, p.holding_force_n)
+        t_best = _feasible_split(norm, grips, safety, p.holding_force_n if hold is None else hold)
         if t_best is None:
             return math.inf, math.inf
     ratio = max(abs(a0 + b1 * t_best) for a0, b1 in norm)
@@ -364,54 +380,55 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     """Judge moving ``arm`` (0..2) from its hole to map row ``hole``: a :class:`MovePlan`, or
     ``(outcome, reason)`` with the outcome ``unreachable`` or ``torque_limit`` (or
     ``grip_lost`` when a gripper would have to hold more than it can)."""
-    g, p = model.geom, model.phys
+    p = model.phys
+    ids = holes.id_list
     if hole in stance:
-        return "unreachable", f"hole {tuple(holes.ids[hole])} is already held"
-    xy = holes.xy
-    c, s = math.cos(heading), math.sin(heading)
-    offs = [(c * g.shoulders[k, 0] - s * g.shoulders[k, 1], s * g.shoulders[k, 0] + c * g.shoulders[k, 1])
-            for k in range(3)]
-    centres = [(float(xy[stance[k], 0]) - offs[k][0], float(xy[stance[k], 1]) - offs[k][1]) for k in range(3)]
-    new = (float(xy[hole, 0]) - offs[arm][0], float(xy[hole, 1]) - offs[arm][1])
+        return "unreachable", f"hole {ids[hole]} is already held"
+    xy = holes.xy_list
+    offs = model.offsets(heading)
+    s0, s1, s2 = stance
+    pts = [(xy[s0][0] - offs[0][0], xy[s0][1] - offs[0][1]), (xy[s1][0] - offs[1][0], xy[s1][1] - offs[1][1]),
+           (xy[s2][0] - offs[2][0], xy[s2][1] - offs[2][1]), (xy[hole][0] - offs[arm][0], xy[hole][1] - offs[arm][1])]
     inner, outer = model.reach
-    pts = centres + [new]
-    span = 2 * max(outer)
+    span2 = (2 * max(outer)) ** 2
     for i in range(4):  # quick rejection: two holes further apart than two arms can span
+        xi, yi = pts[i]
         for j in range(i + 1, 4):
-            if (pts[i][0] - pts[j][0]) ** 2 + (pts[i][1] - pts[j][1]) ** 2 > span * span:
-                return "unreachable", (f"holes {tuple(holes.ids[stance[i if i < 3 else arm]])} and "
-                                       f"{tuple(holes.ids[hole if j == 3 else stance[j]])} are too far apart")
+            if (xi - pts[j][0]) ** 2 + (yi - pts[j][1]) ** 2 > span2:
+                return "unreachable", (f"holes {ids[stance[i]]} and {ids[hole if j == 3 else stance[j]]} "
+                                       f"are too far apart")
     cx, cy, r = min_enclosing_circle(pts)
     clear = p.body_radius_cm + p.reach_margin_cm  # no hole under the body itself
-    for k, (px, py) in enumerate(pts):
+    for k in range(4):
         a = arm if k == 3 else k
-        d = math.hypot(px - cx, py - cy)
+        d = math.hypot(pts[k][0] - cx, pts[k][1] - cy)
         if d > outer[a] or d < max(inner[a], clear):
-            return "unreachable", (f"no body pose reaches holes {[tuple(holes.ids[h]) for h in stance]} and "
-                                   f"{tuple(holes.ids[hole])} at once (they need {r:.1f} cm of reach, the arms have "
-                                   f"{min(outer):.1f}; a hole under the body, within {clear:.1f} cm, cannot be held)")
+            return "unreachable", (f"no body pose reaches holes {[ids[h] for h in stance]} and {ids[hole]} at once "
+                                   f"(they need {r:.1f} cm of reach, the arms have {min(outer):.1f}; a hole under "
+                                   f"the body, within {clear:.1f} cm, cannot be held)")
     pose_to = (cx, cy, heading)
-    new_stance = list(stance)
+    new_stance = [s0, s1, s2]
     new_stance[arm] = hole
     q = []
-    lo, hi = g.elbow_limits
+    lo, hi = model.geom.elbow_limits
+    c, s = math.cos(heading), math.sin(heading)
+    links = model._links  # type: ignore[attr-defined]
     for k in range(3):
-        hx, hy = float(xy[new_stance[k], 0]), float(xy[new_stance[k], 1])
+        hx, hy = xy[new_stance[k]]
         bx, by = hx - cx - offs[k][0], hy - cy - offs[k][1]  # wall-frame vector shoulder -> hand
-        dx, dy = c * bx + s * by, -s * bx + c * by  # in the body frame
-        sk, ek = _ik(float(g.l1[k]), float(g.l2[k]), dx, dy, branch)
+        sk, ek = _ik(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch)
         if not lo <= ek <= hi:
-            return "unreachable", f"arm {k + 1} would need an elbow of {math.degrees(ek):.0f} deg (limits " \
-                                  f"{math.degrees(lo):.0f}..{math.degrees(hi):.0f})"
+            return "unreachable", (f"arm {k + 1} would need an elbow of {math.degrees(ek):.0f} deg (limits "
+                                   f"{math.degrees(lo):.0f}..{math.degrees(hi):.0f})")
         q.append((sk, ek))
-    hands = [(float(xy[h, 0]), float(xy[h, 1])) for h in new_stance]
+    hands = [xy[h] for h in new_stance]
     ratio, grip = swing_loads(model, pose_to, hands, q, arm, p.torque_safety)
     if ratio > p.torque_safety:
-        ratio, grip = swing_loads(model, pose_to, hands, q, arm)  # the best split, to say why
-        if ratio > p.torque_safety:
-            return "torque_limit", (f"holding the body while arm {arm + 1} swings needs {ratio:.0%} of a servo's "
-                                    f"torque (the gait allows {p.torque_safety:.0%})")
-        return "grip_lost", f"a gripper would have to hold {grip:.1f} N (it holds {p.holding_force_n:g} N)"
+        # which limit bites? without the grippers' limit, is there a split?
+        if swing_loads(model, pose_to, hands, q, arm, p.torque_safety, hold=math.inf)[0] > p.torque_safety:
+            return "torque_limit", (f"no split of the body's weight between the two holding arms keeps every "
+                                    f"servo within {p.torque_safety:.0%} of its torque while arm {arm + 1} swings")
+        return "grip_lost", f"a gripper would have to hold more than {p.holding_force_n:g} N while arm {arm + 1} swings"
     return MovePlan(arm, hole, (0.0, 0.0, heading), pose_to, np.array(q), ratio, grip)
 
 
@@ -639,7 +656,7 @@ class PhysicsClimber(ClimberSim):
         kp, vmax = p.servo_gain_per_s, math.radians(p.servo_speed_dps)
         ks = p.servo_stiffness_ncm_per_deg * 100.0 * 180.0 / math.pi  # kg cm^2 / s^2 per rad
         ts_max, te_max = p.shoulder_torque_ncm * 100.0, p.elbow_torque_ncm * 100.0
-        floor_s, floor_e = 0.03 * ts_max, 0.03 * te_max
+        floor_s, floor_e = 0.15 * ts_max, 0.15 * te_max
         b = self.body
         prev = self._prev_targets if self._prev_targets is not None else self.targets
         inv_dt = 1.0 / self.dt
@@ -855,3 +872,34 @@ class PhysicsClimber(ClimberSim):
                     return "fell" if self._hold() < 2 else "grip_lost"
         tx, ty = self._tip(arm)
         return math.hypot(tx - hole_xy[0], ty - hole_xy[1]) <= cap
+
+
+
+def candidate_holes(holes: HoleMap, stance: Sequence[int], k: int, radius: float) -> list[int]:
+    """The ``k`` holes nearest the centroid of the held holes (within ``radius`` cm) that the
+    stance does not hold, nearest first (ties by row): the moves an agent may choose from.
+    A function of the stance alone, so a planner and the environment offer the same moves."""
+    xy = holes.xy_list
+    cx = (xy[stance[0]][0] + xy[stance[1]][0] + xy[stance[2]][0]) / 3.0
+    cy = (xy[stance[0]][1] + xy[stance[1]][1] + xy[stance[2]][1]) / 3.0
+    near = [h for h in holes.within((cx, cy), radius).tolist() if h not in stance]
+    near.sort(key=lambda h: ((xy[h][0] - cx) ** 2 + (xy[h][1] - cy) ** 2, h))
+    return near[:k]
+
+
+def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> list[tuple[int, int, int]]:
+    """Stances near the bottom of the wall the robot can rest in (its three holes fit in its
+    reach), lowest first: the holes within ``rows`` spacings of the lowest hole."""
+    xy = holes.xy
+    y0 = float(xy[:, 1].min())
+    low = [i for i in range(len(holes)) if xy[i, 1] <= y0 + rows * holes.spacing]
+    reach = min(model.reach[1])
+    clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
+    out = []
+    for st in itertools.permutations(low, 3):
+        pts = [tuple(xy[h]) for h in st]
+        cx, cy, r = min_enclosing_circle(pts)
+        if r <= reach and all(math.hypot(px - cx, py - cy) >= clear for px, py in pts):
+            out.append((st[0], st[1], st[2]))
+    out.sort(key=lambda s: (sum(xy[h, 1] for h in s), s))
+    return out

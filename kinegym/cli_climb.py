@@ -1,0 +1,122 @@
+"""``kinegym climb``: run HoleClimb-v0 episodes with the planner or a trained policy, print
+success, moves and falls, and write a GIF of the climb.
+
+Registered on the main parser by :func:`add_parsers`; conventions as in :mod:`kinegym.cli`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kinegym.cli import EXIT_NO_ANSWER, EXIT_OK, UsageError, _emit
+
+__all__ = ["add_parsers", "cmd_climb", "save_gif", "load_policy"]
+
+
+def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
+    """Write RGB frames as an animated GIF (Pillow), same-size frames padded if needed."""
+    from PIL import Image
+
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    h = max(f.shape[0] for f in frames)
+    w = max(f.shape[1] for f in frames)
+    imgs = []
+    for f in frames:
+        canvas = np.full((h, w, 3), 255, np.uint8)
+        canvas[: f.shape[0], : f.shape[1]] = f
+        imgs.append(Image.fromarray(canvas).convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
+    imgs[0].save(out, save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0, optimize=False)
+    return out
+
+
+def load_policy(spec: str) -> Any:
+    """``"planner"`` or a MaskablePPO ``.zip``: an object with ``act(env) -> action``."""
+    from agents.gait_planner import PlannerAgent
+
+    if spec == "planner":
+        return PlannerAgent()
+    path = Path(spec)
+    if not path.is_file():
+        raise UsageError(f"--policy {spec!r} is neither 'planner' nor an existing model file (.zip)")
+    from agents.policies import MaskedPolicyAgent
+
+    return MaskedPolicyAgent(path)
+
+
+def cmd_climb(args: argparse.Namespace) -> int:
+    import gymnasium as gym
+
+    import kinegym  # noqa: F401  (registers the ids)
+    from kinegym.progress import Progress
+
+    if args.episodes < 1:
+        raise UsageError(f"--episodes {args.episodes} must be >= 1")
+    agent = load_policy(args.policy)
+    kwargs: dict[str, Any] = {"mode": args.mode, "robot": args.robot, "wall": args.wall}
+    try:
+        env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array" if args.gif else None, **kwargs)
+        env.reset(seed=args.seed)
+    except RuntimeError as err:  # no route on a fixed wall for this robot
+        _emit(args, {"error": "NoRoute", "message": str(err)}, f"kinegym: {err}")
+        return EXIT_NO_ANSWER
+    rows, frames = [], []
+    t0 = time.perf_counter()
+    with Progress(args.episodes, f"climb ({args.policy}, {args.mode})", enabled=not args.json) as bar:
+        for ep in range(args.episodes):
+            obs, info = env.reset(seed=args.seed + ep)
+            done, ret, tic = False, 0.0, time.perf_counter()
+            falls = 0
+            if args.gif and ep == 0:
+                frames.append(env.render())
+            while not done:
+                a = agent.act(env.unwrapped, obs)
+                if a is None:  # the planner proves it cannot get on from here
+                    break
+                obs, r, term, trunc, info = env.step(a)
+                ret += r
+                falls += info["outcome"] == "fell"
+                done = term or trunc
+                if args.gif and ep == 0:
+                    frames.append(env.render())
+            rows.append({"episode": ep, "seed": args.seed + ep, "success": bool(info["is_success"]),
+                         "moves": int(info["moves"]), "planner_moves": int(info["planner_moves"]),
+                         "falls": falls, "return": round(ret, 3), "wall": info["wall"],
+                         "seconds": time.perf_counter() - tic})
+            bar.update()
+    secs = time.perf_counter() - t0
+    gif = str(save_gif(frames, args.gif, env.unwrapped.metadata["render_fps"])) if args.gif else None
+    env.close()
+    ok = sum(r["success"] for r in rows)
+    lines = [f"HoleClimb-v0 ({args.mode}, robot {args.robot}, wall {args.wall}): policy {args.policy}, "
+             f"{len(rows)} episodes in {secs:.1f} s",
+             f"{'ep':>3} {'seed':>6} {'success':>8} {'moves':>6} {'planner':>8} {'falls':>6} {'return':>8}  wall"]
+    for r in rows:
+        lines.append(f"{r['episode']:>3} {r['seed']:>6} {str(r['success']):>8} {r['moves']:>6} "
+                     f"{r['planner_moves']:>8} {r['falls']:>6} {r['return']:>8.2f}  {r['wall']}")
+    moves = [r["moves"] for r in rows if r["success"]]
+    lines.append(f"success {ok}/{len(rows)}" + (f", mean moves {np.mean(moves):.1f}" if moves else ""))
+    if gif:
+        lines.append(f"gif: {gif}")
+    _emit(args, {"policy": args.policy, "mode": args.mode, "episodes": rows, "success_rate": ok / len(rows),
+                 "gif": gif, "seconds": secs}, "\n".join(lines))
+    return EXIT_OK
+
+
+def add_parsers(sub: Any, common: Any) -> None:
+    cl = sub.add_parser("climb", help="run HoleClimb-v0 episodes with the planner or a trained policy")
+    cl.add_argument("--wall", default="generated",
+                    help="'generated' (a new seeded wall per episode), a wall config name or a YAML path")
+    cl.add_argument("--robot", default="climber", help="robot config (climber_long for the seed's 20 cm wall)")
+    cl.add_argument("--policy", default="planner", help="'planner' or a MaskablePPO model .zip")
+    cl.add_argument("--mode", default="kinematic", choices=("kinematic", "physics"))
+    cl.add_argument("--episodes", type=int, default=5)
+    cl.add_argument("--seed", type=int, default=0, help="seed of the first episode (then +1 per episode)")
+    cl.add_argument("--gif", default=None, help="write a GIF of the first episode")
+    common(cl)
+    cl.set_defaults(func=cmd_climb)

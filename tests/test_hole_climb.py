@@ -1,0 +1,183 @@
+"""HoleClimb-v0: Gymnasium and SB3 conventions, determinism (also across processes), pickling
+and subprocess vectorisation, masked PPO, a long random run, the planner on every wall."""
+
+import hashlib
+import pickle
+import subprocess
+import sys
+import textwrap
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import kinegym  # noqa: F401  (registers the ids)
+from agents.gait_planner import PlannerAgent
+from envs.hole_climb import HoleClimbEnv
+
+ENV_ID = "kinegym/HoleClimb-v0"
+
+
+def rollout_digest(env: gym.Env, seed: int, steps: int) -> str:
+    """Hash of every observation (and reward) of a rollout whose actions come from a
+    generator seeded apart from the env - the same in every process."""
+    rng = np.random.default_rng(12345)
+    h = hashlib.sha256()
+    obs, info = env.reset(seed=seed)
+    h.update(obs.tobytes())
+    for _ in range(steps):
+        mask = info["action_mask"]
+        a = int(rng.choice(np.flatnonzero(mask))) if mask.any() else 0
+        obs, r, term, trunc, info = env.step(a)
+        h.update(obs.tobytes())
+        h.update(np.float64(r).tobytes())
+        if term or trunc:
+            obs, info = env.reset()
+            h.update(obs.tobytes())
+    return h.hexdigest()
+
+
+def test_gymnasium_and_sb3_checkers_pass() -> None:
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make(ENV_ID)
+    check_env(env.unwrapped)
+    sb3_check_env(gym.make(ENV_ID))
+    assert env.spec.max_episode_steps == 200
+    assert env.unwrapped.metadata["render_fps"] > 0
+
+
+def test_spaces_rewards_and_info() -> None:
+    env = gym.make(ENV_ID)
+    obs, info = env.reset(seed=0)
+    assert obs.dtype == np.float32 and env.observation_space.contains(obs)
+    mask = env.unwrapped.action_masks()
+    assert mask.dtype == bool and mask.shape == (env.action_space.n,) and mask.any()
+    assert np.array_equal(mask, info["action_mask"])
+    a = int(np.flatnonzero(mask)[0])
+    obs2, r, term, trunc, info = env.step(a)
+    assert type(r) is float and env.observation_space.contains(obs2)
+    assert info["outcome"] in ("ok", "unreachable", "torque_limit", "missed_hole", "grip_lost", "fell")
+    assert obs2 is not obs and not np.shares_memory(obs2, obs)
+    assert "is_success" in info and "estimated_pose" in info and "true_pose" in info
+    # the estimate is the localiser's, not the truth, but close to it
+    err = np.abs(info["estimated_pose"][:2] - info["true_pose"][:2]).max()
+    assert 0 < err < 0.5
+
+
+def test_same_seed_same_actions_same_observations() -> None:
+    a = rollout_digest(gym.make(ENV_ID), 7, 150)
+    b = rollout_digest(gym.make(ENV_ID), 7, 150)
+    c = rollout_digest(gym.make(ENV_ID), 8, 150)
+    assert a == b != c
+
+
+def test_observations_are_bit_identical_in_another_process() -> None:
+    here = rollout_digest(gym.make(ENV_ID), 3, 120)
+    code = textwrap.dedent("""
+        import sys
+        sys.path.insert(0, "tests")
+        import gymnasium as gym
+        import kinegym
+        from test_hole_climb import rollout_digest
+        print(rollout_digest(gym.make("kinegym/HoleClimb-v0"), 3, 120))
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == here
+
+
+def test_reset_without_seed_does_not_reseed() -> None:
+    env = gym.make(ENV_ID)
+    o1, _ = env.reset(seed=5)
+    o2, _ = env.reset()
+    o3, _ = env.reset(seed=5)
+    assert np.array_equal(o1, o3) and not np.array_equal(o1, o2)
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "physics"])
+def test_env_pickles_mid_episode_and_continues_identically(mode: str) -> None:
+    env = gym.make(ENV_ID, mode=mode)
+    obs, info = env.reset(seed=11)
+    agent = PlannerAgent()
+    for _ in range(3):
+        obs, *_ = env.step(agent.act(env.unwrapped))
+    twin = pickle.loads(pickle.dumps(env))
+    for _ in range(2):
+        a = agent.act(env.unwrapped)
+        o1, r1, *_ = env.step(a)
+        o2, r2, *_ = twin.step(a)
+        assert np.array_equal(o1, o2) and r1 == r2
+
+
+def test_runs_under_subprocess_vec_env() -> None:
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import SubprocVecEnv
+
+    # a fresh worker process has not imported kinegym: the "module:id" form imports it first
+    vec = make_vec_env("kinegym:" + ENV_ID, n_envs=2, seed=0, vec_env_cls=SubprocVecEnv)
+    try:
+        vec.reset()
+        for _ in range(10):
+            masks = np.stack(vec.env_method("action_masks"))
+            actions = np.array([int(np.flatnonzero(m)[0]) for m in masks])
+            obs, rew, done, infos = vec.step(actions)
+            assert obs.shape == (2, 68) and np.isfinite(obs).all()
+    finally:
+        vec.close()
+
+
+def test_maskable_ppo_trains_a_few_hundred_steps() -> None:
+    from sb3_contrib import MaskablePPO
+
+    env = gym.make(ENV_ID)
+    model = MaskablePPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, verbose=0, device="cpu")
+    model.learn(total_timesteps=256)
+    obs, _ = env.reset(seed=1)
+    action, _ = model.predict(obs, action_masks=env.unwrapped.action_masks(), deterministic=True)
+    assert env.unwrapped.action_masks()[int(action)]
+
+
+def test_planner_climbs_every_wall_the_env_accepts() -> None:
+    env = gym.make(ENV_ID)
+    agent = PlannerAgent()
+    for seed in range(8):
+        obs, info = env.reset(seed=seed)
+        done = False
+        while not done:
+            obs, r, term, trunc, info = env.step(agent.act(env.unwrapped))
+            done = term or trunc
+        assert info["is_success"] and info["moves"] == info["planner_moves"], seed
+
+
+def test_fixed_walls_and_their_limits() -> None:
+    env = gym.make(ENV_ID, wall="seed_4x4", robot="climber_long")
+    obs, info = env.reset(seed=0)
+    assert info["wall"] == "seed_4x4" and info["planner_moves"] > 0
+    with pytest.raises(RuntimeError, match="climber_long"):
+        gym.make(ENV_ID, wall="seed_4x4", robot="climber").reset(seed=0)
+    with pytest.raises(ValueError, match="mode"):
+        HoleClimbEnv(mode="dream")
+    with pytest.raises(ValueError, match="wall_kwargs"):
+        HoleClimbEnv(wall_kwargs={"colour": 3})
+
+
+def test_rgb_array_render_needs_no_display() -> None:
+    env = gym.make(ENV_ID, render_mode="rgb_array")
+    env.reset(seed=2)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3 and frame.std() > 5
+
+
+@pytest.mark.slow
+def test_100000_random_valid_actions_raise_nothing() -> None:
+    env = gym.make(ENV_ID)
+    rng = np.random.default_rng(0)
+    obs, info = env.reset(seed=0)
+    for _ in range(100_000):
+        mask = info["action_mask"]
+        a = int(rng.choice(np.flatnonzero(mask))) if mask.any() else int(rng.integers(env.action_space.n))
+        obs, r, term, trunc, info = env.step(a)
+        assert np.isfinite(obs).all() and np.isfinite(r)
+        if term or trunc:
+            obs, info = env.reset()
