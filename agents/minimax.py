@@ -436,19 +436,21 @@ class StrongPlayer:
 
     Args:
         seed: seeds the choice among the moves of the best value.
-        time_budget_s: seconds per move for the exact search; ``None`` = unbounded (always
-            exact). If the budget runs out, the rest of the move goes to an
-            iterative-deepening heuristic search over the moves not proven to lose.
+        time_budget_s: seconds per move the search aims at; ``None`` = unbounded. The budget
+            is soft: the exact search may run on to ``hard_limit_s`` (never losing comes
+            first), and only then does an iterative-deepening heuristic search over the moves
+            not proven to lose decide (``Analysis.exact`` is then False).
         book: use the opening book where one exists for the game.
         temperature: softmax temperature over line potential when choosing among the moves
             of the best value (0 = always the highest potential, ties at random).
         solver: share a :class:`Solver` (its table) between players of one game.
+        hard_limit_s: the most seconds the exact search may take for one move.
     """
 
     name = "solver"
 
     def __init__(self, seed: int | None = None, time_budget_s: float | None = 0.4, book: bool = True,
-                 temperature: float = 0.5, solver: Solver | None = None) -> None:
+                 temperature: float = 0.5, solver: Solver | None = None, hard_limit_s: float = 30.0) -> None:
         if time_budget_s is not None and not time_budget_s > 0:
             raise ValueError(f"time_budget_s={time_budget_s!r}; expected a positive number of seconds or None")
         if temperature < 0:
@@ -457,6 +459,7 @@ class StrongPlayer:
         self.time_budget_s = time_budget_s
         self.use_book = book
         self.temperature = float(temperature)
+        self.hard_limit_s = float(hard_limit_s)
         self._solvers: dict[Game, Solver] = {}
         if solver is not None:
             self._solvers[solver.game] = solver
@@ -522,9 +525,22 @@ class StrongPlayer:
                 best = max(vals.values())
                 bm = [c for c in order if vals[c] == best]
                 return done(Analysis(best, bm, True, "book", move_values=vals))
-        deadline = None if self.time_budget_s is None else t0 + self.time_budget_s
+        # the budget is soft: exactness comes first, so the exact search may run on to
+        # ``hard_limit_s``; only past that does the heuristic search decide
+        deadline = None if self.time_budget_s is None else t0 + max(self.time_budget_s, self.hard_limit_s)
         try:
-            root = solver.value(board, deadline)
+            root = self._book_value(board) if self.use_book else None
+            if root is None and self.use_book and self._parents_lower_bound(board) >= DRAW:
+                # the book says the side to move cannot be losing: only "can it win?" is
+                # open - a null-window search, given part of the budget; unanswered in time,
+                # a draw is what it can surely keep
+                try:
+                    quick = None if self.time_budget_s is None else t0 + 0.5 * self.time_budget_s
+                    root = WIN if solver.bounded(board, DRAW, WIN, quick) >= WIN else DRAW
+                except SearchTimeout:
+                    root = DRAW
+            if root is None:
+                root = solver.value(board, deadline)
             best_moves, values = [], {}
             for c in order:
                 v = -solver.bounded(board.play(c), -root, -root + 1, deadline)  # is this move >= root?
@@ -540,6 +556,42 @@ class StrongPlayer:
             move = self._fallback(board, order, solver, t0)
             return done(Analysis(DRAW, [move], False, "heuristic", complete=False))
 
+    @staticmethod
+    def _parents_lower_bound(board: Board) -> int:
+        """A lower bound on the value for the side to move from the book's values of the
+        positions the last move may have come from (one of the opponent's stones taken
+        back): whichever it was, the opponent's move could not raise its own value, so
+        ``value >= -value(parent)``; the bound is the least over the candidates (-1 if any
+        is missing from the book)."""
+        from agents import book as _book
+
+        got = _book.load(board.game)
+        if got is None or board.n_stones - 1 > got[1] or board.n_stones == 0:
+            return LOSS
+        values, _ = got
+        last = board.o if board.to_move == X else board.x  # the stones of who moved last
+        bound = WIN
+        m = last
+        while m:
+            bit = m & -m
+            m ^= bit
+            parent = Board(board.game, board.x & ~bit, board.o & ~bit)
+            v = values.get(canonical_key(parent))
+            if v is None:
+                return LOSS
+            bound = min(bound, -v)
+        return bound
+
+    @staticmethod
+    def _book_value(board: Board) -> int | None:
+        """The position's own value from the book, if it holds it."""
+        from agents import book as _book
+
+        got = _book.load(board.game)
+        if got is None or board.n_stones > got[1]:
+            return None
+        return got[0].get(canonical_key(board))
+
     def _fallback(self, board: Board, order: list[int], solver: Solver, t0: float) -> int:
         """Out of time: drop moves the table already proves losing, then deepen a heuristic
         alpha-beta search over the rest for a quarter of the budget more."""
@@ -550,7 +602,7 @@ class StrongPlayer:
                 keep.append(c)
         keep = keep or order
         budget = self.time_budget_s or 0.1
-        search = _HeuristicSearch(board.game, time.perf_counter() + 0.25 * budget)
+        search = _HeuristicSearch(board.game, time.perf_counter() + budget)
         return search.best(board, keep)
 
 
