@@ -223,10 +223,6 @@ class GaitResult:
         return self.outcome == "ok"
 
 
-def _cross(ax: float, ay: float, bx: float, by: float) -> float:
-    return ax * by - ay * bx
-
-
 def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Sequence[tuple[float, float]],
                 q: Sequence[tuple[float, float]], free: int, safety: float | None = None,
                 hold: float | None = None) -> tuple[float, float]:
@@ -256,54 +252,41 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
         a1 = th + q[k][0]
         ex, ey = sx + links[k][0] * math.cos(a1), sy + links[k][0] * math.sin(a1)
         pts.append((sx, sy, ex, ey, hands[k][0], hands[k][1]))
+    # (a moment of a weight w at horizontal offset dx is -w dx: gravity is along -y)
     # the free arm hangs from its shoulder: its weight and moment act on the body
     sx, sy, ex, ey, hx, hy = pts[free]
-    m_free = (_cross(0.5 * (sx + ex) - sx, 0.5 * (sy + ey) - sy, 0.0, -w_up)
-              + _cross(0.5 * (ex + hx) - sx, 0.5 * (ey + hy) - sy, 0.0, -w_low)
-              + _cross(hx - sx, hy - sy, 0.0, -w_hand))
+    m_free = -w_up * 0.5 * (ex - sx) - w_low * (0.5 * (ex + hx) - sx) - w_hand * (hx - sx)
     t_free_s = abs(m_free) / p.shoulder_torque_ncm
-    t_free_e = abs(_cross(0.5 * (hx - ex), 0.5 * (hy - ey), 0.0, -w_low) + _cross(hx - ex, hy - ey, 0.0, -w_hand)) \
-        / p.elbow_torque_ncm
-    w_body = p.body_mass_kg * G + w_up + w_low + w_hand  # the free arm's weight, hung at its shoulder
-    holding = [k for k in range(3) if k != free]
+    t_free_e = abs(-w_low * 0.5 * (hx - ex) - w_hand * (hx - ex)) / p.elbow_torque_ncm
+    w_arm = w_up + w_low + w_hand
+    w_body = p.body_mass_kg * G + w_arm  # the free arm's weight, hung at its shoulder
+    a, b = (1, 2) if free == 0 else (0, 2) if free == 1 else (0, 1)
     # G_k: moment about the hand of the holding arm's own link weights
-    Gk = []
-    for k in holding:
-        sx, sy, ex, ey, hx, hy = pts[k]
-        Gk.append(_cross(0.5 * (sx + ex) - hx, 0.5 * (sy + ey) - hy, 0.0, -w_up)
-                  + _cross(0.5 * (ex + hx) - hx, 0.5 * (ey + hy) - hy, 0.0, -w_low))
+    sax, say, eax, eay, hax, hay = pts[a]
+    sbx, sby, ebx, eby, hbx, hby = pts[b]
+    ga = -w_up * (0.5 * (sax + eax) - hax) - w_low * 0.5 * (eax - hax)
+    gb = -w_up * (0.5 * (sbx + ebx) - hbx) - w_low * 0.5 * (ebx - hbx)
     # F_k: the force arm k exerts on the body at its shoulder. Arm k about its hand (a
     # passive pivot): tau_s = (S - H) x F_k - G_k for its shoulder servo. The body:
     # F_a + F_b = (0, w_body), and its moments, with the shoulder torques substituted,
     # sum_k (C - H_k) x F_k = sum_k G_k + moment of the body's load about C
-    fsx, fsy = pts[free][0], pts[free][1]
-    m_load = _cross(fsx - cx, fsy - cy, 0.0, -(w_up + w_low + w_hand)) + m_free
-    a, b = holding
-    hax, hay, hbx, hby = pts[a][4], pts[a][5], pts[b][4], pts[b][5]
-    W = (0.0, w_body)
-    rhs = (Gk[0] + Gk[1]) + m_load - _cross(cx - hbx, cy - hby, W[0], W[1])
+    m_load = -w_arm * (sx - cx) + m_free
+    rhs = ga + gb + m_load - (cx - hbx) * w_body  # cross(u, F_a) after F_b = W - F_a
     ux, uy = hbx - hax, hby - hay
     uu = ux * ux + uy * uy
-    kk = rhs  # cross(u, F_a) = rhs after substituting F_b = W - F_a
-    fpx, fpy = -uy * kk / uu, ux * kk / uu
+    fpx, fpy = -uy * rhs / uu, ux * rhs / uu
     # torques affine in t (F_a = F_p + t u): shoulder and elbow of both holding arms
     lines = []  # (a0, b1, limit) with torque = a0 + b1 t
     grips = []
-    for idx, k in enumerate(holding):
-        sign = 1.0 if idx == 0 else -1.0
-        f0x, f0y = (fpx, fpy) if idx == 0 else (W[0] - fpx, W[1] - fpy)
-        dfx, dfy = sign * ux, sign * uy
-        sx, sy, ex, ey, hx, hy = pts[k]
+    for (sxk, syk, exk, eyk, hxk, hyk), gk, f0x, f0y, dfx, dfy in (
+            (pts[a], ga, fpx, fpy, ux, uy), (pts[b], gb, -fpx, w_body - fpy, -ux, -uy)):
         # the arm receives -F_k from the body at S
-        ts0 = _cross(sx - hx, sy - hy, f0x, f0y) - Gk[idx]
-        ts1 = _cross(sx - hx, sy - hy, dfx, dfy)
+        dsx, dsy, dex, dey = sxk - hxk, syk - hyk, exk - hxk, eyk - hyk
+        lines.append((dsx * f0y - dsy * f0x - gk, dsx * dfy - dsy * dfx, p.shoulder_torque_ncm))
         # elbow: the lower link about the hand; the upper link passes F_k + its weight to it
-        lowm = _cross(0.5 * (ex - hx), 0.5 * (ey - hy), 0.0, -w_low)
-        te0 = -lowm + _cross(ex - hx, ey - hy, f0x, f0y + w_up)
-        te1 = _cross(ex - hx, ey - hy, dfx, dfy)
-        lines.append((ts0, ts1, p.shoulder_torque_ncm))
-        lines.append((te0, te1, p.elbow_torque_ncm))
-        grips.append((f0x, f0y + w_up + w_low + w_hand, dfx, dfy))
+        lines.append((w_low * 0.5 * dex + dex * (f0y + w_up) - dey * f0x, dex * dfy - dey * dfx,
+                      p.elbow_torque_ncm))
+        grips.append((f0x, f0y + w_arm, dfx, dfy))
     norm = [(a0 / lim, b1 / lim) for a0, b1, lim in lines]
     if safety is None:
         t_best = _minimax_line(norm)
