@@ -144,7 +144,6 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             self._fixed_wall = HoleMap.from_config(wall)
         self._localizers: dict[int, Localizer] = {}
         self._window = None
-        self._clock = None
         self.holes: HoleMap | None = None
 
     # ------------------------------------------------------------------ walls
@@ -367,7 +366,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     # ------------------------------------------------------------------ pickling
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        state["_window"], state["_clock"] = None, None
+        state["_window"] = None
         if self.mode == "physics":
             # pymunk does not replay bit-identically from a copied space: the copy rebuilds
             # it by replaying this episode from its seeded start instead
@@ -403,24 +402,14 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
                            [f"move {self.moves}: {self.last_outcome}", self.last_reason[:70]])
         if self.render_mode == "rgb_array":
             return frame
-        import pygame  # lazy: only for a window
-
         if self._window is None:
-            pygame.init()
-            self._window = pygame.display.set_mode(frame.shape[1::-1])
-            pygame.display.set_caption("kinegym HoleClimb-v0")
-            self._clock = pygame.time.Clock()
-        surf = pygame.surfarray.make_surface(np.ascontiguousarray(frame.transpose(1, 0, 2)))
-        self._window.blit(surf, (0, 0))
-        pygame.event.pump()
-        pygame.display.flip()
-        self._clock.tick(self.metadata["render_fps"])  # type: ignore[union-attr]
+            from envs.viewer import Window
+
+            self._window = Window("kinegym HoleClimb-v0", self.metadata["render_fps"])
+        self._window.show(frame)
         return None
 
     def close(self) -> None:
         if self._window is not None:
-            import pygame
-
-            pygame.display.quit()
-            pygame.quit()
+            self._window.close()
             self._window = None
