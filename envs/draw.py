@@ -141,11 +141,13 @@ _SERIES: tuple[Colour, ...] = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (25
 
 def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
                ylabel: str, size: tuple[int, int] = (720, 420), log_x: bool = False,
-               ylim: tuple[float, float] | None = None) -> np.ndarray:
+               ylim: tuple[float, float] | None = None, markers: bool = True) -> np.ndarray:
     """A small line chart (RGB array) of named ``(x, y)`` series, drawn with OpenCV.
 
-    Enough for the project's study plots without a plotting dependency: axes with ticks,
-    one colour per series with markers, a legend, a title and axis labels.
+    Enough for the project's study plots without a plotting dependency: axes with ticks
+    (one per distinct x for a few points, six evenly spaced otherwise), one colour per
+    series (with markers unless ``markers=False``, for long time series), a legend, a
+    title and axis labels.
     """
     w, h = size
     img = np.empty((h, w, 3), np.uint8)
@@ -175,7 +177,10 @@ def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title
         v = int(round(h - bottom - k * (h - top - bottom) / 5))
         cv2.line(img, (left, v), (w - right, v), (225, 225, 225), 1)
         cv2.putText(img, f"{yv:.3g}", (5, v + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1, cv2.LINE_AA)
-    for xv in sorted(set(np.round(xs, 6).tolist())):
+    ticks = sorted(set(np.round(xs, 6).tolist()))
+    if len(ticks) > 12:
+        ticks = np.round(np.linspace(float(np.min(xs)), float(np.max(xs)), 6), 3).tolist()
+    for xv in ticks:
         u = int(to_px(np.array([xv]), np.array([y0]))[0, 0])
         cv2.line(img, (u, h - bottom), (u, h - bottom + 5), (60, 60, 60), 1)
         cv2.putText(img, f"{xv:g}", (u - 12, h - bottom + 20), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1,
@@ -187,7 +192,7 @@ def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title
         pts = to_px(np.asarray(x, float)[ok], y_arr[ok])
         if len(pts) > 1:
             cv2.polylines(img, [pts.reshape(-1, 1, 2)], False, col, 2, cv2.LINE_AA)
-        for p in pts:
+        for p in pts if markers else ():
             cv2.circle(img, (int(p[0]), int(p[1])), 4, col, -1, cv2.LINE_AA)
         ly = top + 16 + 18 * i
         cv2.line(img, (left + 10, ly - 4), (left + 30, ly - 4), col, 2, cv2.LINE_AA)
