@@ -174,6 +174,8 @@ class Solver:
         self.table: dict[int, int] = {}
         self.nodes = 0
         self._deadline = math.inf
+        #: what deadlines are measured on: wall time, or a node count (StrongPlayer(deterministic=True))
+        self.clock: Callable[[], float] = time.perf_counter
         self._w = _POTENTIAL[: game.k + 1]
         # hot-path constants as plain attributes
         self._full, self._n, self._need = game.full, game.n_cells, game.k - 1
@@ -207,7 +209,7 @@ class Solver:
     # -- search ------------------------------------------------------------------
     def _negamax(self, me: int, op: int, emes: list[int], eops: list[int], alpha: int, beta: int) -> int:
         self.nodes += 1
-        if not self.nodes & 1023 and time.perf_counter() > self._deadline:
+        if not self.nodes & 1023 and self.clock() > self._deadline:
             raise SearchTimeout("exact search ran past its deadline")
         occ = me | op
         if occ == self._full:
@@ -445,12 +447,18 @@ class StrongPlayer:
             of the best value (0 = always the highest potential, ties at random).
         solver: share a :class:`Solver` (its table) between players of one game.
         hard_limit_s: the most seconds the exact search may take for one move.
+        deterministic: measure the budget in search nodes (``node_seconds`` of "time" each)
+            instead of on the wall clock, so that a seeded player makes the same moves on
+            any machine and under any load (the envs' opponents use this).
+        node_seconds: the time one node stands for in deterministic mode (about this
+            machine's speed, so the budgets keep their meaning).
     """
 
     name = "solver"
 
     def __init__(self, seed: int | None = None, time_budget_s: float | None = 0.4, book: bool = True,
-                 temperature: float = 0.5, solver: Solver | None = None, hard_limit_s: float = 30.0) -> None:
+                 temperature: float = 0.5, solver: Solver | None = None, hard_limit_s: float = 30.0,
+                 deterministic: bool = False, node_seconds: float = 1e-5) -> None:
         if time_budget_s is not None and not time_budget_s > 0:
             raise ValueError(f"time_budget_s={time_budget_s!r}; expected a positive number of seconds or None")
         if temperature < 0:
@@ -460,6 +468,9 @@ class StrongPlayer:
         self.use_book = book
         self.temperature = float(temperature)
         self.hard_limit_s = float(hard_limit_s)
+        self.deterministic = bool(deterministic)
+        self.node_seconds = float(node_seconds)
+        self._extra_nodes = 0  # heuristic-search nodes (deterministic clock)
         self._solvers: dict[Game, Solver] = {}
         if solver is not None:
             self._solvers[solver.game] = solver
@@ -502,14 +513,20 @@ class StrongPlayer:
         """
         if board.is_over:
             raise GameError(f"no legal move: the game is over ({board.result()})")
-        t0 = time.perf_counter()
+        wall0 = time.perf_counter()
         solver = self.solver(board.game)
+        if self.deterministic:
+            ns = self.node_seconds
+            solver.clock = lambda: (solver.nodes + self._extra_nodes) * ns
+        else:
+            solver.clock = time.perf_counter
+        t0 = solver.clock()
         n0 = solver.nodes
         moves = board.legal_moves()
         order = self._sample_order(board, moves)
 
         def done(a: Analysis) -> Analysis:
-            a.seconds, a.nodes = time.perf_counter() - t0, solver.nodes - n0
+            a.seconds, a.nodes = time.perf_counter() - wall0, solver.nodes - n0
             return a
 
         # immediate wins and forced blocks need no search
@@ -602,8 +619,14 @@ class StrongPlayer:
                 keep.append(c)
         keep = keep or order
         budget = self.time_budget_s or 0.1
-        search = _HeuristicSearch(board.game, time.perf_counter() + budget)
-        return search.best(board, keep)
+        search = _HeuristicSearch(board.game, solver.clock() + budget)
+        if self.deterministic:
+            ns = self.node_seconds
+            search.clock = lambda: (solver.nodes + self._extra_nodes + search.nodes) * ns
+        try:
+            return search.best(board, keep)
+        finally:
+            self._extra_nodes += search.nodes
 
 
 class _HeuristicSearch:
@@ -617,6 +640,8 @@ class _HeuristicSearch:
         self.game = game
         self.deadline = deadline
         self.w = _POTENTIAL[: game.k + 1]
+        self.nodes = 0
+        self.clock: Callable[[], float] = time.perf_counter
 
     def best(self, board: Board, moves: list[int]) -> int:
         me, op = _sides(board)
@@ -639,7 +664,8 @@ class _HeuristicSearch:
         return choice
 
     def _search(self, me: int, op: int, last: int, depth: int, alpha: int, beta: int) -> int:
-        if time.perf_counter() > self.deadline:
+        self.nodes += 1
+        if self.clock() > self.deadline:
             raise SearchTimeout("heuristic search ran past its deadline")
         g = self.game
         if any(line & op == line for line in g.lines_through[last]):

@@ -230,3 +230,28 @@ def test_book_is_consistent_and_its_deepest_entries_resolve() -> None:
     for i in rng.choice(len(deepest), 2, replace=False):
         b = deepest[int(i)]
         assert values[canonical_key(b)] == solver.value(b), str(b)
+
+
+def test_deterministic_strong_player_repeats_itself_under_any_load() -> None:
+    """Budgets counted in nodes: a seeded player makes the same moves, however slow the
+    machine (a tiny budget forces the timed-out path, which wall time would make random)."""
+    from agents.minimax import RandomPlayer, StrongPlayer
+    from envs.game import THESIS
+
+    sources: set[str] = set()
+
+    def game(seed: int) -> list[int]:
+        sp = StrongPlayer(seed=seed, deterministic=True, time_budget_s=0.01, hard_limit_s=0.02)
+        rp = RandomPlayer(seed=seed)
+        b, moves = THESIS.empty(), []
+        while not b.is_over:
+            c = (sp if b.to_move == 1 else rp).choose(b)
+            if b.to_move == 1:
+                sources.add(sp.last.source)
+            moves.append(c)
+            b = b.play(c)
+        return moves
+
+    assert game(3) == game(3)
+    assert "heuristic" in sources  # the budget really ran out
+    assert game(3) != game(4)
