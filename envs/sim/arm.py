@@ -74,7 +74,8 @@ from .strokes import (
     plan,
 )
 
-__all__ = ["ArmSim", "Recording", "HomingError", "HomingReport", "StepMetrics", "step_metrics", "JointParams"]
+__all__ = ["ArmSim", "Recording", "HomingError", "HomingReport", "StepMetrics", "step_metrics", "JointParams",
+           "view_box"]
 
 _NCM = 100.0  # 1 N cm in pymunk units (kg cm^2 / s^2)
 _N = 100.0  # 1 N in kg cm / s^2
@@ -787,6 +788,15 @@ class ArmSim:
                         "(the TicTacToeDraw env pickles by replaying its actions)")
 
 
+def view_box(sim: ArmSim) -> tuple[float, float, float, float]:
+    """The arm-frame box ``(x0, x1, y0, y1)`` cm that :meth:`ArmSim.render` shows: the canvas
+    and the base; image pixel ``(u, v)`` at ``scale`` is arm point ``(x0 + u / scale, y1 - v / scale)``."""
+    ox, oy = sim.layout.canvas_origin
+    w_cm, h_cm = sim.layout.canvas_size
+    bx, by = sim.arm.base_xy
+    return (min(ox, bx - 4) - 1, max(ox + w_cm, bx + 4) + 1, min(oy, by - 4) - 1, max(oy + h_cm, by + 4) + 1)
+
+
 def render_arm(sim: ArmSim, scale: float, status: Sequence[str]) -> np.ndarray:
     """Draw :meth:`ArmSim.render`'s picture (kept apart from the physics)."""
     import cv2
@@ -794,9 +804,7 @@ def render_arm(sim: ArmSim, scale: float, status: Sequence[str]) -> np.ndarray:
     lay = sim.layout
     ox, oy = lay.canvas_origin
     w_cm, h_cm = lay.canvas_size
-    bx, by = sim.arm.base_xy
-    x0, x1 = min(ox, bx - 4) - 1, max(ox + w_cm, bx + 4) + 1
-    y0, y1 = min(oy, by - 4) - 1, max(oy + h_cm, by + 4) + 1
+    x0, x1, y0, y1 = view_box(sim)
     W, H = int(round((x1 - x0) * scale)), int(round((y1 - y0) * scale))
     img = np.empty((H, W, 3), np.uint8)
     img[...] = (205, 205, 200)
