@@ -229,13 +229,109 @@ def cmd_demo(args: argparse.Namespace) -> int:
     rows.append(("Pincher IK, seed 002 task 6.4", f"{int(reach.sum())} branches for 5 targets, "
                  f"{int(inlim.sum())} in limits, FK error <= {err:.1e} cm", "ok" if err < 1e-9 else "FAIL"))
 
+    secs = [time.perf_counter() - t_start]  # everything so far: milliseconds
+
+    # 5. a climb on a generated wall by the gait planner
+    t0 = time.perf_counter()
+    climb = _demo_climb(out)
+    rows.append(("HoleClimb-v0: planner climbs", climb["result"], "ok" if climb["success"] else "FAIL"))
+    files += climb["files"]
+    secs.append(time.perf_counter() - t0)
+
+    # 6. one full game of the arm (solver) against the thesis player, drawn in pymunk and read by the camera
+    t0 = time.perf_counter()
+    game = _demo_game(out, args.quick)
+    rows.append(("TicTacToeDraw-v0: arm vs thesis player", game["result"], game["status"]))
+    files += game["files"]
+    secs.append(time.perf_counter() - t0)
+
     elapsed = time.perf_counter() - t_start
+    per_row = [secs[0] / (len(rows) - 2)] * (len(rows) - 2) + secs[1:]
     width = max(len(r[0]) for r in rows)
-    lines = ["kinegym demo", ""] + [f"{a:<{width}}  {c:<10} {b}" for a, b, c in rows]
-    lines += ["", f"done in {elapsed:.2f} s; files:"] + [f"  {p}" for p in files]
-    _emit(args, {"steps": [{"step": a, "result": b, "status": c} for a, b, c in rows],
+    lines = ["kinegym demo", ""] + [f"{a:<{width}}  {c:<10} {t:6.1f} s  {b}" for (a, b, c), t in zip(rows, per_row)]
+    lines += ["", f"done in {elapsed:.1f} s; files in {out}/:"] + [f"  {Path(p).name}" for p in files]
+    _emit(args, {"steps": [{"step": a, "result": b, "status": c, "seconds": t} for (a, b, c), t in zip(rows, per_row)],
                  "files": files, "seconds": elapsed}, "\n".join(lines))
     return EXIT_OK
+
+
+def _demo_climb(out: Path) -> dict[str, Any]:
+    """The gait planner climbing a generated wall; a GIF of the climb."""
+    import gymnasium as gym
+
+    import kinegym  # noqa: F401
+    from agents.gait_planner import PlannerAgent
+    from kinegym.cli_climb import save_gif
+
+    env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array")
+    obs, info = env.reset(seed=1)
+    agent = PlannerAgent()
+    frames = [env.render()]
+    done = False
+    while not done:
+        a = agent.act(env.unwrapped, obs)
+        if a is None:
+            break
+        obs, r, term, trunc, info = env.step(a)
+        frames.append(env.render())
+        done = term or trunc
+    gif = save_gif(frames, out / "climb.gif", env.unwrapped.metadata["render_fps"])
+    from envs.draw import save_rgb
+
+    png = save_rgb(frames[-1], out / "climb_final.png")
+    env.close()
+    return {"success": bool(info["is_success"]), "files": [str(gif), str(png)],
+            "result": f"{info['wall']}: reached the goal in {info['moves']} moves (planner's route "
+                      f"{info['planner_moves']})" if info["is_success"] else
+                      f"stopped after {info['moves']} moves"}
+
+
+def _demo_game(out: Path, quick: bool) -> dict[str, Any]:
+    """The arm (solver) against the thesis player: homing, field, marks, readings, wipe."""
+    import gymnasium as gym
+
+    import kinegym  # noqa: F401
+    from agents.minimax import StrongPlayer
+    from envs.draw import save_rgb
+    from envs.game import Board
+    from kinegym.cli_climb import save_gif
+
+    env = gym.make("kinegym/TicTacToeDraw-v0", opponent="thesis", homing=True, draw_physics=not quick,
+                   render_mode="rgb_array")
+    u = env.unwrapped
+    frames: list[np.ndarray] = []
+    u.on_frame, u.frame_every_s = frames.append, 2.0
+    player = StrongPlayer(seed=0, deterministic=True)
+    obs, info = env.reset(seed=0)
+    homing = u.sim.homing_report
+    reads = [info["read_ok"]]
+    right = [info["read_board"] == info["true_board"]]
+    done, moves = False, 0
+    board_png = None
+    while not done:
+        a = player.choose(Board.from_cells(u.game, u.belief))
+        before_erase = len(frames)
+        obs, r, term, trunc, info = env.step(a)
+        moves += 1
+        reads.append(info["read_ok"])
+        right.append(info["read_board"] == info["true_board"])
+        frames.append(env.render())
+        done = term or trunc
+        if done and u._photo is not None:
+            board_png = save_rgb(u._photo, out / "game_photo.png")  # the camera's last look before the wipe
+            if before_erase < len(frames) - 1:
+                save_rgb(frames[before_erase], out / "game_board.png")
+    gif = save_gif(frames, out / "game.gif", 4) if frames else None
+    files = [str(p) for p in (gif, board_png, out / "game_board.png") if p is not None and Path(p).is_file()]
+    env.close()
+    who = {"X": "the arm (X) wins", "O": "the thesis player (O) wins", "draw": "a draw"}[info["winner"]]
+    hom = ""
+    if homing is not None:
+        hom = (f"; homed from {np.degrees(np.abs(homing.start_error[:3])).max():.1f} deg off to "
+               f"{np.degrees(np.abs(homing.residual)).max():.2f} deg")
+    result = (f"{who} after {moves} arm moves; {sum(right)}/{len(right)} readings equal the board, "
+              f"{len(reads) - sum(reads)} flagged; {u.sim.time_s:.0f} s of arm motion simulated{hom}")
+    return {"result": result, "files": files, "status": "ok" if info["winner"] != "O" and all(right) else "FAIL"}
 
 
 def _wall(spec: str, args: argparse.Namespace) -> Any:
@@ -400,6 +496,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", help="the main job on built-in defaults (writes PNGs to --out)")
     d.add_argument("--out", default="kinegym-out", help="output folder (default: ./kinegym-out)")
+    d.add_argument("--quick", action="store_true", help="the game with ideal strokes instead of the arm in pymunk")
     common(d)
     d.set_defaults(func=cmd_demo)
 
@@ -476,11 +573,12 @@ def build_parser() -> argparse.ArgumentParser:
     common(ss)
     ss.set_defaults(func=cmd_sensor_study, map_default=0.01)
 
-    from kinegym import cli_arm, cli_climb, cli_game
+    from kinegym import cli_arm, cli_climb, cli_game, cli_play
 
     cli_game.add_parsers(sub, common)
     cli_climb.add_parsers(sub, common)
     cli_arm.add_parsers(sub, common)
+    cli_play.add_parsers(sub, common)
     return p
 
 

@@ -1,0 +1,243 @@
+"""``kinegym play``: a person plays tic-tac-toe against the writing arm.
+
+The game runs in :class:`envs.tictactoe_draw.TicTacToeDrawEnv` with the person as the
+opponent: the arm draws the field, the person makes a mark, the camera photographs the
+board and the reader reads it like any other mark, the arm's player answers and the arm
+draws it; at the end the arm wipes the board. A status line shows the thesis GUI's
+messages.
+
+* With a display: a pygame window; draw your mark with the mouse (hold the left button),
+  ``Backspace`` takes your last stroke back, ``Enter`` says you are done; ``Esc`` quits.
+  Your cell is the one under the middle of your strokes.
+* Without a display (or ``--terminal``): type your cell as ``ROW,COL`` (0-based, row 0 at
+  the top); the program draws a hand-made mark there for you. It says that it fell back.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable
+from typing import Any, TextIO
+
+import numpy as np
+
+from kinegym.cli import EXIT_OK, UsageError, _emit
+
+__all__ = ["add_parsers", "cmd_play", "TerminalPerson", "display_available"]
+
+_FRAME_SCALE = 20.0  # TicTacToeDrawEnv._frame draws the arm view at 20 px/cm
+
+
+class Quit(Exception):
+    """The person left the game."""
+
+
+def display_available() -> bool:
+    """True when a pygame window can be shown (a display, not SDL's dummy driver)."""
+    if os.environ.get("SDL_VIDEODRIVER", "") in ("dummy", "offscreen"):
+        return False
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return False
+    try:
+        import pygame  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class TerminalPerson:
+    """The person as the env's opponent, typing cells (``draws_itself`` False: the env draws
+    a hand-made mark in the typed cell)."""
+
+    draws_itself = False
+
+    def __init__(self, stdin: TextIO, stdout: TextIO, n: int, show: Callable[[], None]) -> None:
+        self.stdin, self.stdout, self.n, self.show = stdin, stdout, n, show
+
+    def __call__(self, board: Any) -> int:
+        self.show()
+        while True:
+            self.stdout.write(f"your move: ROW,COL (0..{self.n - 1}, row 0 at the top), or q to quit: ")
+            self.stdout.flush()
+            line = self.stdin.readline()
+            if not line or line.strip().lower() in ("q", "quit", "exit"):
+                raise Quit()
+            try:
+                r, c = (int(v) for v in line.replace(" ", "").split(","))
+            except ValueError:
+                self.stdout.write(f"  {line.strip()!r} is not ROW,COL\n")
+                continue
+            if not (0 <= r < self.n and 0 <= c < self.n):
+                self.stdout.write(f"  ({r}, {c}) is off the board\n")
+                continue
+            cell = r * self.n + c
+            if not board.is_legal(cell):
+                self.stdout.write(f"  ({r}, {c}) is taken\n")
+                continue
+            return cell
+
+
+class WindowPerson:
+    """The person drawing with the mouse in a pygame window (``draws_itself``: the strokes
+    are inked on the board as drawn)."""
+
+    draws_itself = True
+
+    def __init__(self, env: Any) -> None:
+        import pygame
+
+        self.pg, self.env = pygame, env
+        pygame.init()
+        frame = env._frame()
+        self.screen = pygame.display.set_mode(frame.shape[1::-1])
+        pygame.display.set_caption("kinegym play - draw your mark, Enter when done")
+        from envs.sim.arm import view_box
+
+        self.box = view_box(env.sim)
+
+    def show(self, frame: np.ndarray | None = None, hint: str = "") -> None:
+        import cv2
+
+        pg = self.pg
+        frame = self.env._frame() if frame is None else frame
+        if hint:
+            frame = frame.copy()
+            cv2.putText(frame, hint, (8, frame.shape[0] - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (180, 20, 20), 1,
+                        cv2.LINE_AA)
+        surf = pg.surfarray.make_surface(np.ascontiguousarray(frame.transpose(1, 0, 2)))
+        self.screen.blit(surf, (0, 0))
+        pg.display.flip()
+
+    def to_canvas(self, u: float, v: float) -> np.ndarray:
+        x0, _, _, y1 = self.box
+        p = np.array([x0 + u / _FRAME_SCALE, y1 - v / _FRAME_SCALE])
+        return p - np.asarray(self.env.sim.layout.canvas_origin)
+
+    def __call__(self, board: Any) -> int:
+        from envs.sim.board import PENS
+
+        pg, env = self.pg, self.env
+        lay, n = env.layout, env.n
+        strokes: list[list[np.ndarray]] = []
+        base = env.sim.canvas.copy()
+        hint = "draw your mark (mouse), Backspace: undo, Enter: done"
+        while True:
+            self.show(hint=hint)
+            ev = pg.event.wait()
+            if ev.type == pg.QUIT or (ev.type == pg.KEYDOWN and ev.key == pg.K_ESCAPE):
+                raise Quit()
+            if ev.type == pg.MOUSEBUTTONDOWN and ev.button == 1:
+                strokes.append([self.to_canvas(*ev.pos)])
+            elif ev.type == pg.MOUSEMOTION and ev.buttons[0] and strokes:
+                strokes[-1].append(self.to_canvas(*ev.pos))
+                env.sim.canvas.stroke(np.array(strokes[-1][-2:]), PENS["black"])
+            elif ev.type == pg.KEYDOWN and ev.key == pg.K_BACKSPACE and strokes:
+                strokes.pop()
+                env.sim.canvas = base.copy()
+                for s in strokes:
+                    env.sim.canvas.stroke(np.array(s), PENS["black"])
+            elif ev.type == pg.KEYDOWN and ev.key in (pg.K_RETURN, pg.K_KP_ENTER) and strokes:
+                pts = np.concatenate([np.array(s) for s in strokes])
+                c = (pts.min(0) + pts.max(0)) / 2 - np.asarray(lay.field_origin)
+                col, row = int(c[0] // lay.cell), int(n - 1 - c[1] // lay.cell)
+                if not (0 <= row < n and 0 <= col < n):
+                    hint = "that is off the field - Backspace and draw inside a cell"
+                    continue
+                cell = row * n + col
+                if not board.is_legal(cell):
+                    hint = f"cell ({row}, {col}) is taken - Backspace and draw in a free cell"
+                    continue
+                return cell
+
+    def close(self) -> None:
+        self.pg.display.quit()
+        self.pg.quit()
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    from agents.minimax import make_player
+    from envs.game import Board
+    from envs.tictactoe_draw import TicTacToeDrawEnv
+    from kinegym.factories import strong_opponent, thesis_opponent
+
+    if args.board not in (3, 5):
+        raise UsageError(f"--board {args.board}; expected 3 or 5")
+    k = args.k if args.k is not None else (3 if args.board == 3 else 4)
+    if not 2 <= k <= args.board:
+        raise UsageError(f"--k {k}; expected 2..{args.board}")
+    person_sym = args.symbol.upper()
+    if person_sym not in ("X", "O"):
+        raise UsageError(f"--symbol {args.symbol!r}; expected X or O")
+    arm_sym = "O" if person_sym == "X" else "X"
+    out = sys.stdout
+    gui = not args.terminal and display_available()
+    if not gui and not args.terminal:
+        out.write("kinegym play: no display found - playing in the terminal (type your cells)\n")
+    env = TicTacToeDrawEnv(board=args.board, k=k, agent_symbol=arm_sym, opponent=lambda b: 0,
+                           opponents={"strong": strong_opponent, "thesis": thesis_opponent},
+                           draw_physics=not args.fast, erase=not args.no_erase)
+    player = make_player(args.opponent, seed=args.seed)
+    shown = [0]
+
+    def show_status(info: dict[str, Any] | None = None) -> None:
+        msgs = env._status[shown[0]:]
+        for m in msgs:
+            out.write(f"  [{m}]\n")
+        shown[0] = len(env._status)
+        if info is not None or msgs:
+            rows = ["|".join(" " + ("." if v == 0 else "XO"[int(v) - 1]) + " " for v in row) for row in env.belief]
+            out.write("  board as read:\n" + "\n".join("    " + r for r in rows) + "\n")
+        out.flush()
+
+    person: Any
+    if gui:
+        person = WindowPerson(env)
+    else:
+        person = TerminalPerson(sys.stdin, out, args.board, show_status)
+    env.opponent_spec = person
+    result = {"winner": None, "moves": 0}
+    try:
+        env.reset(seed=args.seed)
+        show_status()
+        done = False
+        info: dict[str, Any] = {}
+        while not done:
+            shown[0] = 0
+            board = Board.from_cells(env.game, env.belief)
+            a = player.choose(board)
+            obs, r, term, trunc, info = env.step(a)
+            result["moves"] += 1
+            show_status(info)
+            if gui:
+                person.show()
+            done = term or trunc
+        result["winner"] = info.get("winner")
+        who = {arm_sym: "the arm", person_sym: "you"}.get(str(info.get("winner")), "nobody (a draw)")
+        out.write(f"game over: {info.get('winner')} - {who} won\n" if info.get("winner") != "draw"
+                  else "game over: a draw\n")
+    except Quit:
+        out.write("you left the game\n")
+        result["winner"] = "quit"
+    finally:
+        if gui:
+            person.close()
+    if args.json:
+        _emit(args, result, "")
+    return EXIT_OK
+
+
+def add_parsers(sub: Any, common: Any) -> None:
+    pl = sub.add_parser("play", help="play tic-tac-toe against the writing arm (window, or terminal without one)")
+    pl.add_argument("--board", type=int, default=5, help="3 or 5 cells a side (default 5, the thesis's game)")
+    pl.add_argument("--k", type=int, default=None, help="in a row to win (default 4 on 5 x 5, 3 on 3 x 3)")
+    pl.add_argument("--symbol", default="X", help="your symbol: X (you start) or O")
+    pl.add_argument("--opponent", default="solver", choices=("solver", "thesis", "random"),
+                    help="the arm's player (default: the solver, which never loses)")
+    pl.add_argument("--seed", type=int, default=0)
+    pl.add_argument("--terminal", action="store_true", help="type cells in the terminal even with a display")
+    pl.add_argument("--fast", action="store_true", help="ideal strokes instead of the arm in pymunk")
+    pl.add_argument("--no-erase", action="store_true", help="leave the board as it is at the end")
+    common(pl)
+    pl.set_defaults(func=cmd_play)
