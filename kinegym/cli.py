@@ -573,12 +573,13 @@ def build_parser() -> argparse.ArgumentParser:
     common(ss)
     ss.set_defaults(func=cmd_sensor_study, map_default=0.01)
 
-    from kinegym import cli_arm, cli_climb, cli_game, cli_play
+    from kinegym import cli_arm, cli_climb, cli_game, cli_play, cli_train
 
     cli_game.add_parsers(sub, common)
     cli_climb.add_parsers(sub, common)
     cli_arm.add_parsers(sub, common)
     cli_play.add_parsers(sub, common)
+    cli_train.add_parsers(sub, common)
     return p
 
 

@@ -17,12 +17,18 @@ def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
 
 
 def test_demo_writes_picture_and_summary(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json")
+    # --quick: the game with ideal strokes (CI runs the full demo once, as the README's first command)
+    code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json", "--quick")
     assert code == 0
     summary = json.loads(out)
     assert all(step["status"] in ("ok", "reproduced") for step in summary["steps"])
+    steps = [s["step"] for s in summary["steps"]]
+    assert "HoleClimb-v0: planner climbs" in steps and "TicTacToeDraw-v0: arm vs thesis player" in steps
     png = Path(summary["files"][0])
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5000
+    names = {Path(f).name for f in summary["files"]}
+    assert {"climb.gif", "game.gif", "game_photo.png"} <= names
+    assert all(Path(f).stat().st_size > 1000 for f in summary["files"])
 
 
 def test_ik_climber_json_reproduces_seed(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -1,0 +1,513 @@
+"""Learning the climber's gait with stable-baselines3: train, resume, evaluate against the
+planner, and tune hyper-parameters on Optuna.
+
+One readable script in the CleanRL spirit, behind ``kinegym train gait``, ``kinegym
+evaluate gait`` and ``kinegym tune gait`` (also ``python -m agents.train ...``):
+
+* **Configuration**, RL-Zoo style: ``configs/train/hole_climb_maskable_ppo.yaml`` holds one
+  section per env id (``n_envs``, ``n_timesteps``, ``policy``, ``policy_kwargs``,
+  ``env_kwargs``, PPO's hyper-parameters; ``learning_rate`` / ``clip_range`` may be
+  schedules such as ``lin_3e-4``), validated on load (file, key and bad value named).
+* **Training**: sb3-contrib's MaskablePPO (masks through the env's ``action_masks()``), a
+  ``SubprocVecEnv`` when ``n_envs > 1`` (forkserver workers: keep the ``__main__`` guard),
+  ``torch.set_num_threads(1)`` by default (several times faster on 2 cores).
+* **A run directory** holds ``config.yaml`` (resolved), ``command.txt``, ``monitor/``
+  (Monitor CSVs with ``is_success``), ``tb/`` (TensorBoard), ``checkpoints/`` (model,
+  optimiser, step counter and normalisation statistics every ``checkpoint_freq`` steps),
+  ``best/best_model.zip`` (by a masked evaluation on validation walls), ``final_model.zip``,
+  ``evaluations.npz`` and ``learning_curve.png``. ``--resume RUN`` continues the last
+  checkpoint of ``RUN`` into a new directory ``RUN-resume<k>``; nothing of ``RUN`` is touched.
+* **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...``; the
+  evaluation callback uses the validation stream (seed ``VALIDATION_SEED``); ``evaluate``
+  uses the held-out walls ``HELD_OUT_SEED + i``, each reset with its own seed - never seen
+  in training or selection.
+* **Tuning**: ``tune`` runs Optuna trials (TPE sampler, median pruner fed by the evaluation
+  callback); any number of processes or machines pointing at the same ``--storage``
+  (``sqlite:///file.db``, ``postgresql://...``, or ``journal:PATH`` for a journal file on a
+  shared disk) cooperate on one study.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+import configs as _configs
+
+__all__ = [
+    "TRAIN_SCHEMA",
+    "ENV_ID",
+    "HELD_OUT_SEED",
+    "VALIDATION_SEED",
+    "load_train_config",
+    "parse_schedule",
+    "train",
+    "resume",
+    "evaluate",
+    "tune",
+    "EvalRow",
+    "main",
+]
+
+ENV_ID = "kinegym/HoleClimb-v0"
+HELD_OUT_SEED = 1_000_000  # evaluate: wall i is reset(seed=HELD_OUT_SEED + i)
+VALIDATION_SEED = 2_000_000  # the evaluation callback's wall stream
+DEFAULT_CONFIG = "hole_climb_maskable_ppo"
+
+
+@dataclass(frozen=True)
+class _Mapping(_configs.Spec):
+    """A free-form mapping (passed on to SB3 / the env, which check their own keys)."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        if not isinstance(value, dict):
+            raise _configs.ConfigError(source, key, value, "a mapping")
+        return dict(value)
+
+
+@dataclass(frozen=True)
+class _Schedule(_configs.Spec):
+    """A positive number or ``lin_<start>`` (linear decay to 0 over training)."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        try:
+            parse_schedule(value)
+        except ValueError:
+            raise _configs.ConfigError(source, key, value, "a number > 0 or 'lin_<number>' (e.g. lin_3e-4)") from None
+        return value
+
+
+_N = _configs.Number
+TRAIN_SCHEMA: dict[str, _configs.Spec] = {
+    "algo": _configs.Text(choices=("maskable_ppo",), default="maskable_ppo"),
+    "n_envs": _N(lo=1, hi=64, integer=True, default=2),
+    "n_timesteps": _N(lo=1, integer=True, default=500_000),
+    "policy": _configs.Text(choices=("MlpPolicy",), default="MlpPolicy"),
+    "policy_kwargs": _Mapping(default={}),
+    "env_kwargs": _Mapping(default={}),
+    "learning_rate": _Schedule(default=3e-4),
+    "clip_range": _Schedule(default=0.2),
+    "n_steps": _N(lo=8, integer=True, default=1024, doc="steps per env per update"),
+    "batch_size": _N(lo=8, integer=True, default=256),
+    "n_epochs": _N(lo=1, integer=True, default=10),
+    "gamma": _N(lo=0.0, hi=1.0, default=0.99),
+    "gae_lambda": _N(lo=0.0, hi=1.0, default=0.95),
+    "ent_coef": _N(lo=0.0, default=0.01),
+    "vf_coef": _N(lo=0.0, default=0.5),
+    "max_grad_norm": _N(lo=0.0, lo_open=True, default=0.5),
+    "normalize": _configs.Flag(default=False, doc="VecNormalize the observations"),
+    "eval_freq": _N(lo=1, integer=True, default=20_000, doc="env steps (all envs) between evaluations"),
+    "eval_episodes": _N(lo=1, integer=True, default=40),
+    "checkpoint_freq": _N(lo=1, integer=True, default=50_000, doc="env steps (all envs) between checkpoints"),
+    "torch_threads": _N(lo=1, integer=True, default=1),
+}
+
+
+def parse_schedule(value: Any) -> float | Callable[[float], float]:
+    """``3e-4`` -> 3e-4; ``"lin_3e-4"`` -> ``f(progress_remaining) = 3e-4 * progress_remaining``."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if value > 0 and math.isfinite(value):
+            return float(value)
+        raise ValueError(f"schedule {value!r}: expected > 0")
+    if isinstance(value, str) and value.startswith("lin_"):
+        start = float(value[4:])
+        if start > 0 and math.isfinite(start):
+            return lambda p: start * p
+    raise ValueError(f"schedule {value!r}: expected a number > 0 or 'lin_<number>'")
+
+
+def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str = ENV_ID) -> dict[str, Any]:
+    """The validated section ``env_id`` of a training YAML (a ``configs/train`` name or a path)."""
+    src = _configs.resolve("train", path)
+    try:
+        data = yaml.safe_load(src.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise _configs.ConfigError(str(src), "", "<unparsable YAML>", f"valid YAML ({exc})") from exc
+    if not isinstance(data, dict) or env_id not in data:
+        raise _configs.ConfigError(str(src), env_id, None if not isinstance(data, dict) else sorted(data),
+                                   f"a section for {env_id}")
+    return _configs.validate(data[env_id], TRAIN_SCHEMA, str(src), prefix=env_id)
+
+
+# ------------------------------------------------------------------ environments
+def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | None, subproc: bool) -> Any:
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    import kinegym  # noqa: F401  (registers the ids)
+
+    kwargs: dict[str, Any] = {}
+    if subproc and n_envs > 1:
+        kwargs = {"vec_env_cls": SubprocVecEnv, "vec_env_kwargs": {"start_method": "forkserver"}}
+    else:
+        kwargs = {"vec_env_cls": DummyVecEnv}
+    return make_vec_env(f"kinegym:{ENV_ID}", n_envs=n_envs, seed=seed, env_kwargs=dict(cfg["env_kwargs"]),
+                        monitor_dir=str(monitor_dir) if monitor_dir else None,
+                        monitor_kwargs={"info_keywords": ("is_success",)}, **kwargs)
+
+
+def _model_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
+    keys = ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "ent_coef", "vf_coef", "max_grad_norm")
+    out = {k: cfg[k] for k in keys}
+    out["learning_rate"] = parse_schedule(cfg["learning_rate"])
+    out["clip_range"] = parse_schedule(cfg["clip_range"])
+    out["policy_kwargs"] = dict(cfg["policy_kwargs"])
+    return out
+
+
+def _new_run_dir(base: Path, stem: str) -> Path:
+    for k in range(10_000):
+        d = base / (stem if k == 0 else f"{stem}-{k}")
+        if not d.exists():
+            d.mkdir(parents=True)
+            return d
+    raise RuntimeError(f"no free run directory under {base}")
+
+
+def _callbacks(cfg: dict[str, Any], run: Path, seed: int, n_envs: int, extra: Sequence[Any] = ()) -> list[Any]:
+    from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
+    from stable_baselines3.common.callbacks import CheckpointCallback
+
+    eval_env = _make_vec(cfg, 1, VALIDATION_SEED, None, subproc=False)
+    if cfg["normalize"]:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
+    every = max(1, cfg["eval_freq"] // n_envs)
+    # the eval env is a DummyVecEnv of one, the training env a SubprocVecEnv: that is meant
+    warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
+    ev = MaskableEvalCallback(eval_env, n_eval_episodes=cfg["eval_episodes"], eval_freq=every,
+                              best_model_save_path=str(run / "best"), log_path=str(run), deterministic=True,
+                              callback_after_eval=extra[0] if extra else None, verbose=0)
+    ck = CheckpointCallback(save_freq=max(1, cfg["checkpoint_freq"] // n_envs), save_path=str(run / "checkpoints"),
+                            name_prefix="model", save_vecnormalize=cfg["normalize"])
+    return [ck, ev]
+
+
+def _set_threads(n: int) -> None:
+    import torch
+
+    torch.set_num_threads(int(n))
+
+
+def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, seed: int = 0, n_envs: int | None = None,
+          out: str | Path = "runs", progress: bool = True, overrides: dict[str, Any] | None = None,
+          trial_callback: Any = None, command: Sequence[str] | None = None) -> Path:
+    """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring)."""
+    from sb3_contrib import MaskablePPO
+
+    cfg = load_train_config(config)
+    cfg.update(overrides or {})
+    if timesteps is not None:
+        if timesteps < 1:
+            raise ValueError(f"timesteps={timesteps!r}; expected >= 1")
+        cfg["n_timesteps"] = int(timesteps)
+    if n_envs is not None:
+        if not 1 <= n_envs <= 64:
+            raise ValueError(f"n_envs={n_envs!r}; expected 1..64")
+        cfg["n_envs"] = int(n_envs)
+    _set_threads(cfg["torch_threads"])
+    run = _new_run_dir(Path(out), f"gait-seed{seed}")
+    (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
+    (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
+    env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True)
+    if cfg["normalize"]:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        env = VecNormalize(env, norm_reward=False)
+    try:
+        model = MaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"), device="cpu",
+                            **_model_kwargs(cfg))
+        cbs = _callbacks(cfg, run, seed, cfg["n_envs"], [trial_callback] if trial_callback else [])
+        model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
+        model.save(run / "final_model.zip")
+        if cfg["normalize"]:
+            env.save(str(run / "vecnormalize.pkl"))
+    finally:
+        env.close()
+    learning_curve(run)
+    return run
+
+
+def _last_checkpoint(run: Path) -> tuple[Path, int]:
+    cks = sorted((int(p.stem.split("_")[1]), p) for p in (run / "checkpoints").glob("model_*_steps.zip"))
+    if not cks:
+        final = run / "final_model.zip"
+        if final.is_file():
+            from sb3_contrib import MaskablePPO
+
+            return final, int(MaskablePPO.load(final, device="cpu").num_timesteps)
+        raise FileNotFoundError(f"{run}: no checkpoints/model_*_steps.zip and no final_model.zip to resume from")
+    steps, path = cks[-1]
+    return path, steps
+
+
+def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = True,
+           command: Sequence[str] | None = None) -> Path:
+    """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
+    statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
+    (default: the run's ``n_timesteps``)."""
+    from sb3_contrib import MaskablePPO
+
+    src = Path(run_dir)
+    if not (src / "config.yaml").is_file():
+        raise FileNotFoundError(f"--resume {src}: not a run directory (no config.yaml)")
+    saved = yaml.safe_load((src / "config.yaml").read_text())
+    cfg = _configs.validate(saved[ENV_ID], TRAIN_SCHEMA, str(src / "config.yaml"), prefix=ENV_ID)
+    seed = int(saved.get("seed", 0))
+    ck, steps = _last_checkpoint(src)
+    total = cfg["n_timesteps"] if timesteps is None else int(timesteps)
+    if total <= steps:
+        raise ValueError(f"--timesteps {total}: the checkpoint {ck.name} is already at {steps} steps")
+    cfg["n_timesteps"] = total
+    _set_threads(cfg["torch_threads"])
+    k = 1
+    while (src.parent / f"{src.name}-resume{k}").exists():
+        k += 1
+    run = _new_run_dir(src.parent, f"{src.name}-resume{k}")
+    (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed, "resumed_from": str(ck),
+                                                     "resumed_steps": steps}, sort_keys=False))
+    (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
+    env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True)
+    if cfg["normalize"]:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        stats = ck.parent / f"model_vecnormalize_{steps}_steps.pkl"
+        if not stats.is_file():
+            stats = src / "vecnormalize.pkl"
+        env = VecNormalize.load(str(stats), env)
+    try:
+        model = MaskablePPO.load(ck, env=env, device="cpu", tensorboard_log=str(run / "tb"))
+        cbs = _callbacks(cfg, run, seed, cfg["n_envs"])
+        model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
+                    reset_num_timesteps=False, tb_log_name="run")
+        model.save(run / "final_model.zip")
+        if cfg["normalize"]:
+            env.save(str(run / "vecnormalize.pkl"))
+    finally:
+        env.close()
+    best = src / "best" / "best_model.zip"
+    if best.is_file() and not (run / "best" / "best_model.zip").is_file():
+        (run / "best").mkdir(exist_ok=True)
+        shutil.copy2(best, run / "best" / "best_model.zip")
+    learning_curve(run, earlier=[src])
+    return run
+
+
+# ------------------------------------------------------------------ pictures
+def _monitor_rows(run: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(cumulative env steps, success) per finished training episode, in time order."""
+    rows = []
+    for f in sorted((run / "monitor").glob("*.monitor.csv")):
+        with f.open() as fh:
+            fh.readline()  # the JSON header line
+            header = fh.readline().strip().split(",")
+            for line in fh:
+                vals = dict(zip(header, line.strip().split(",")))
+                ok = vals.get("is_success", "0") in ("True", "1", "1.0")
+                rows.append((float(vals["t"]), int(vals["l"]), float(ok)))
+    if not rows:
+        return np.zeros(0), np.zeros(0)
+    rows.sort()
+    steps = np.cumsum([r[1] for r in rows])
+    return steps.astype(float), np.array([r[2] for r in rows])
+
+
+def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
+    """``learning_curve.png``: validation success (evaluation callback) and the rolling
+    training success over env steps (earlier runs of a resumed chain included)."""
+    from envs.draw import line_chart, save_rgb
+
+    series: dict[str, tuple[Any, Any]] = {}
+    xs, ys = [], []
+    for r in [*earlier, run]:
+        ev = r / "evaluations.npz"
+        if ev.is_file():
+            d = np.load(ev)
+            if "successes" in d and len(d["successes"]):
+                xs += d["timesteps"].tolist()
+                ys += d["successes"].mean(axis=1).tolist()
+    if xs:
+        order = np.argsort(xs)
+        series["validation success (deterministic, masked)"] = (np.asarray(xs)[order], np.asarray(ys)[order])
+    steps, succ = _monitor_rows(run)
+    if len(steps) > 10:
+        w = max(5, len(succ) // 50)
+        roll = np.convolve(succ, np.ones(w) / w, mode="valid")
+        offset = 0.0
+        if earlier:
+            try:
+                offset = float(yaml.safe_load((run / "config.yaml").read_text()).get("resumed_steps", 0))
+            except Exception:  # noqa: BLE001 - the curve is a convenience
+                offset = 0.0
+        sx = steps[w - 1:] + offset
+        k = max(1, len(sx) // 300)
+        series[f"training success (rolling {w} episodes)"] = (sx[::k], roll[::k])
+    if not series:
+        return None
+    img = line_chart(series, "HoleClimb-v0: MaskablePPO learning curve", "env steps", "success rate",
+                     size=(820, 420), ylim=(0.0, 1.02), markers=False)
+    return save_rgb(img, run / "learning_curve.png")
+
+
+# ------------------------------------------------------------------ evaluation
+@dataclass
+class EvalRow:
+    """One agent on the held-out walls in one mode."""
+
+    agent: str
+    mode: str
+    episodes: int
+    success: float
+    falls: int
+    mean_moves: float
+    moves_vs_planner: float
+    decision_ms: float
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("kinematic",), walls: str = "held-out",
+             progress: Callable[[], None] | None = None) -> list[EvalRow]:
+    """The policy and the planner, deterministically, on the same walls: ``held-out`` (wall
+    ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``."""
+    import gymnasium as gym
+
+    import kinegym  # noqa: F401
+    from agents.gait_planner import PlannerAgent
+    from agents.policies import MaskedPolicyAgent
+
+    if walls not in ("held-out", "validation"):
+        raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
+    base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
+    pol = MaskedPolicyAgent(policy)
+    rows = []
+    for mode in modes:
+        env = gym.make(ENV_ID, mode=mode)
+        results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
+        for i in range(episodes):
+            for name in ("planner", "policy"):
+                agent = PlannerAgent() if name == "planner" else pol
+                obs, info = env.reset(seed=base + i)
+                done, falls, moves, think = False, 0, 0, []
+                while not done:
+                    t0 = time.perf_counter()
+                    a = agent.act(env.unwrapped, obs)
+                    think.append(time.perf_counter() - t0)
+                    if a is None:
+                        break
+                    obs, r, term, trunc, info = env.step(a)
+                    falls += info["outcome"] == "fell"
+                    moves += 1
+                    done = term or trunc
+                results[name].append({"success": bool(info["is_success"]), "falls": falls, "moves": moves,
+                                      "think": float(np.median(think)) if think else 0.0})
+            if progress:
+                progress()
+        env.close()
+        for name in ("policy", "planner"):
+            res = results[name]
+            ok = [r for r in res if r["success"]]
+            both = [(p["moves"], q["moves"]) for p, q in zip(results["policy"], results["planner"])
+                    if p["success"] and q["success"]]
+            if not both:
+                ratio = math.nan
+            else:
+                ratio = float(np.mean([a / b for a, b in both])) if name == "policy" else 1.0
+            rows.append(EvalRow(name if name == "planner" else str(policy), mode, len(res),
+                                len(ok) / len(res), sum(r["falls"] for r in res),
+                                float(np.mean([r["moves"] for r in ok])) if ok else math.nan, ratio,
+                                1000 * float(np.median([r["think"] for r in res]))))
+    return rows
+
+
+# ------------------------------------------------------------------ tuning
+def _storage(url: str) -> Any:
+    import optuna
+
+    if url.startswith("journal:"):
+        from optuna.storages.journal import JournalFileBackend, JournalStorage
+
+        return JournalStorage(JournalFileBackend(url[len("journal:"):]))
+    return optuna.storages.RDBStorage(url) if "://" in url else url
+
+
+def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config: str | Path = DEFAULT_CONFIG,
+         out: str | Path = "runs/tune", seed: int = 0, progress: bool = False) -> dict[str, Any]:
+    """Run ``trials`` Optuna trials of the study ``study`` in ``storage`` (created if missing);
+    several processes or machines may run this at once on one storage. Returns a summary."""
+    import optuna
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    st = _storage(storage)
+    s = optuna.create_study(study_name=study, storage=st, load_if_exists=True, direction="maximize",
+                            sampler=optuna.samplers.TPESampler(seed=None),
+                            pruner=optuna.pruners.MedianPruner(n_startup_trials=2, n_warmup_steps=1))
+
+    class Report(BaseCallback):  # called after every evaluation: report and maybe prune
+        def __init__(self, trial: optuna.Trial) -> None:
+            super().__init__()
+            self.trial, self.k, self.pruned = trial, 0, False
+
+        def _on_step(self) -> bool:
+            ev = self.parent
+            value = float(np.mean(ev._is_success_buffer)) if ev._is_success_buffer else float(ev.last_mean_reward)
+            self.k += 1
+            self.trial.report(value, self.k)
+            self.trial.set_user_attr("last_value", value)
+            if self.trial.should_prune():
+                self.pruned = True
+                return False
+            return True
+
+    def objective(trial: optuna.Trial) -> float:
+        over = {
+            "learning_rate": trial.suggest_float("learning_rate", 5e-5, 2e-3, log=True),
+            "ent_coef": trial.suggest_float("ent_coef", 1e-4, 5e-2, log=True),
+            "gamma": trial.suggest_categorical("gamma", [0.97, 0.99, 0.995]),
+            "n_steps": trial.suggest_categorical("n_steps", [256, 512, 1024]),
+            "policy_kwargs": {"net_arch": [trial.suggest_categorical("width", [64, 128, 256])] * 2},
+        }
+        cb = Report(trial)
+        run = train(config, timesteps, seed + trial.number, out=out, progress=progress,
+                    overrides={**over, "eval_freq": max(64, timesteps // 4)}, trial_callback=cb,
+                    command=["kinegym", "tune", "gait", f"trial {trial.number} of study {study}"])
+        trial.set_user_attr("run", str(run))
+        if cb.pruned:
+            raise optuna.TrialPruned()
+        if "last_value" not in trial.user_attrs:
+            raise RuntimeError(f"trial {trial.number}: no evaluation ran in {timesteps} steps; raise --timesteps")
+        return float(trial.user_attrs["last_value"])
+
+    s.optimize(objective, n_trials=trials)
+    done = [t for t in s.trials if t.state == optuna.trial.TrialState.COMPLETE]
+    best = s.best_trial if done else None
+    return {"study": study, "storage": storage, "trials": len(s.trials), "complete": len(done),
+            "pruned": sum(t.state == optuna.trial.TrialState.PRUNED for t in s.trials),
+            "best_value": None if best is None else best.value, "best_params": None if best is None else best.params}
+
+
+# ------------------------------------------------------------------ command line
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m agents.train {train,evaluate,tune} ...`` - the same as ``kinegym ... gait``."""
+    from kinegym.cli import main as cli_main
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args and args[0] in ("train", "evaluate", "tune"):
+        args = [args[0], "gait", *args[1:]]
+    return cli_main(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

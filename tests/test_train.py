@@ -1,0 +1,100 @@
+"""Training the gait: config validation, a short MaskablePPO run with SubprocVecEnv, the
+resume path, evaluation against the planner, and an Optuna study shared by two workers."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from agents import train as T
+from configs import ConfigError
+
+SMALL = {"n_envs": 2, "n_timesteps": 1024, "n_steps": 64, "batch_size": 64, "n_epochs": 2,
+         "eval_freq": 256, "eval_episodes": 2, "checkpoint_freq": 256, "policy_kwargs": {"net_arch": [32, 32]}}
+
+
+def small_config(tmp_path: Path, **changes: object) -> Path:
+    base = yaml.safe_load((Path(T.__file__).parents[1] / "configs" / "train" /
+                           "hole_climb_maskable_ppo.yaml").read_text())
+    base[T.ENV_ID].update({**SMALL, **changes})
+    p = tmp_path / "small.yaml"
+    p.write_text(yaml.safe_dump(base))
+    return p
+
+
+def test_config_is_validated_with_file_key_and_value(tmp_path: Path) -> None:
+    cfg = T.load_train_config()
+    assert cfg["algo"] == "maskable_ppo" and cfg["n_envs"] >= 1
+    with pytest.raises(ConfigError, match=r"HoleClimb-v0.learning_rate: 'fast' is not valid"):
+        T.load_train_config(small_config(tmp_path, learning_rate="fast"))
+    with pytest.raises(ConfigError, match="n_envs"):
+        T.load_train_config(small_config(tmp_path, n_envs=0))
+    with pytest.raises(ConfigError, match="no such key"):
+        T.load_train_config(small_config(tmp_path, learning_rat=1e-3))
+    f = T.parse_schedule("lin_1e-3")
+    assert f(1.0) == pytest.approx(1e-3) and f(0.5) == pytest.approx(5e-4)
+    assert T.parse_schedule(3e-4) == 3e-4
+
+
+def _digest(run: Path) -> dict[str, str]:
+    return {str(p.relative_to(run)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(run.rglob("*")) if p.is_file()}
+
+
+def test_train_smoke_resume_and_evaluate(tmp_path: Path) -> None:
+    from sb3_contrib import MaskablePPO
+
+    cfg = small_config(tmp_path)
+    run = T.train(cfg, seed=0, out=tmp_path / "runs", progress=False, command=["test"])
+    for f in ("config.yaml", "command.txt", "final_model.zip", "evaluations.npz", "learning_curve.png",
+              "best/best_model.zip"):
+        assert (run / f).is_file(), f
+    assert len(list((run / "monitor").glob("*.monitor.csv"))) == 2  # two SubprocVecEnv workers
+    assert list((run / "checkpoints").glob("model_*_steps.zip"))
+    assert list((run / "tb").rglob("events.out.tfevents*"))
+    first = MaskablePPO.load(run / "final_model.zip", device="cpu")
+    assert first.num_timesteps >= 1024
+
+    before = _digest(run)
+    ck, steps = T._last_checkpoint(run)
+    res = T.resume(run, timesteps=2048, progress=False, command=["test"])
+    assert res.name == f"{run.name}-resume1" and _digest(run) == before  # nothing of the first run touched
+    second = MaskablePPO.load(res / "final_model.zip", device="cpu")
+    assert second.num_timesteps >= 2048
+    # the step counter carried on from the checkpoint: the resumed run did the rest, not all
+    ran = sum(int(line.split(",")[1]) for f in (res / "monitor").glob("*.csv")
+              for line in f.read_text().splitlines()[2:])
+    assert ran <= 2048 - steps + 2 * 200  # plus at most one unfinished episode per env
+    saved = yaml.safe_load((res / "config.yaml").read_text())
+    assert saved["resumed_steps"] == steps
+    with pytest.raises(ValueError, match="already at"):
+        T.resume(run, timesteps=steps, progress=False)
+
+    rows = T.evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",))
+    by = {r.agent: r for r in rows}
+    assert by["planner"].success == 1.0 and by["planner"].episodes == 2
+    pol = next(r for r in rows if r.agent != "planner")
+    assert 0.0 <= pol.success <= 1.0 and pol.decision_ms > 0
+
+
+def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:
+    import optuna
+
+    cfg = small_config(tmp_path, n_envs=1, eval_episodes=1)
+    storage = f"journal:{tmp_path / 'study.log'}"
+    cmd = [sys.executable, "-m", "agents.train", "tune", "--trials", "1", "--storage", storage, "--study", "s",
+           "--timesteps", "256", "--config", str(cfg), "--out", str(tmp_path / "tune"), "--json"]
+    procs = [subprocess.Popen([*cmd, "--seed", str(10 * i)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=Path(T.__file__).parents[1]) for i in range(2)]
+    for p in procs:
+        out, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err[-2000:]
+    study = optuna.load_study(study_name="s", storage=T._storage(storage))
+    assert len(study.trials) == 2
+    assert all(t.state in (optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED) for t in study.trials)
+    assert len({t.params["learning_rate"] for t in study.trials}) == 2
