@@ -10,6 +10,11 @@ Run::
   per second of the kinematic climber itself (``KinematicClimber.move``, fresh judgements,
   no cache hits), along random walks on a 10 x 16 wall.
 * HoleClimb-v0, physics: env steps (= gait moves) per second and physics steps per second.
+* TicTacToeDraw-v0: agent moves per second (each: the arm's mark, the opponent's mark, a
+  photo and a reading; resets with the field and game ends with the wipe included) with
+  ``draw_physics=False`` (ideal strokes) and with the arm in pymunk; and over
+  ``--ttt-games`` seeded games with the default camera (and a quarter as many with the
+  hand-held ``hard`` camera), the share of steps whose board as read equals the true board.
 * LunarLander-v3, BipedalWalker-v3: steps per second under random actions.
 """
 
@@ -72,11 +77,36 @@ def gait_move_rate(seconds: float) -> tuple[float, int]:
     return n / (time.perf_counter() - t0), ok
 
 
+def read_accuracy(games: int, camera: str = "default") -> None:
+    """Share of TicTacToeDraw-v0 steps whose accepted reading equals the true board."""
+    env = gym.make("kinegym/TicTacToeDraw-v0", draw_physics=False, opponent="thesis", erase=False, camera=camera)
+    steps = right = flagged = tries = 0
+    for g in range(games):
+        rng = np.random.default_rng(g)
+        obs, info = env.reset(seed=1000 + g)
+        done = False
+        while True:
+            steps += 1
+            right += info["read_board"] == info["true_board"]
+            flagged += not info["read_ok"]
+            tries += info["read_tries"]
+            if done:
+                break
+            obs, r, term, trunc, info = env.step(int(rng.choice(np.flatnonzero(info["action_mask"]))))
+            done = term or trunc
+    print(f"TicTacToeDraw-v0 reading, {games} games, {camera} camera: board as read == true board in "
+          f"{right}/{steps} steps ({right / steps:.2%}); {flagged} flagged inconsistent (read_ok False); "
+          f"{tries / steps:.3f} photos per reading\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="seconds per measurement")
+    ap.add_argument("--ttt-games", type=int, default=200, help="games for the TicTacToeDraw reading figure")
     args = ap.parse_args()
     s = args.seconds
+    read_accuracy(args.ttt_games)
+    read_accuracy(max(1, args.ttt_games // 4), "hard")
     print("| environment | steps per second | notes |")
     print("|---|---|---|")
     rate, n = gait_move_rate(s)
@@ -100,6 +130,20 @@ def main() -> None:
     print(f"| HoleClimb-v0 physics: gait moves | {moves / el:,.1f} | each a whole simulated motion |")
     print(f"| HoleClimb-v0 physics: pymunk steps | {steps / el:,.0f} | 240 Hz, {steps / max(moves, 1):.0f} "
           f"steps per move |", flush=True)
+    for phys in (False, True):
+        env = gym.make("kinegym/TicTacToeDraw-v0", draw_physics=phys, opponent="thesis")
+        rng = np.random.default_rng(2)
+        obs, info = env.reset(seed=2)
+        moves, t0 = 0, time.perf_counter()
+        while time.perf_counter() - t0 < (3 if phys else 1) * s:
+            obs, r, term, trunc, info = env.step(int(rng.choice(np.flatnonzero(info["action_mask"]))))
+            moves += 1
+            if term or trunc:
+                obs, info = env.reset()
+        el = time.perf_counter() - t0
+        what = "arm in pymunk (field, marks, wipe)" if phys else "ideal strokes"
+        print(f"| TicTacToeDraw-v0, {what} | {moves / el:,.1f} | agent moves (each with the opponent's and a "
+              "reading), resets and wipes included |", flush=True)
     for anchor in ("LunarLander-v3", "BipedalWalker-v3"):
         try:
             rate, n = env_rate(gym.make(anchor), s, False)
