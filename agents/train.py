@@ -56,6 +56,7 @@ __all__ = [
     "evaluate",
     "tune",
     "EvalRow",
+    "policy_env_kwargs",
     "main",
 ]
 
@@ -361,6 +362,22 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
 
 
 # ------------------------------------------------------------------ evaluation
+def policy_env_kwargs(policy: str | Path) -> dict[str, Any]:
+    """The ``env_kwargs`` a saved policy was trained with (from its run's ``config.yaml``, next
+    to the model or one folder up - ``best/`` and ``checkpoints/``), without ``mode``; ``{}``
+    for a model outside a run directory."""
+    p = Path(policy)
+    for d in (p.parent, p.parent.parent):
+        f = d / "config.yaml"
+        if f.is_file():
+            saved = yaml.safe_load(f.read_text())
+            kw = dict((saved.get(ENV_ID) or {}).get("env_kwargs") or {})
+            kw.pop("mode", None)
+            return kw
+    return {}
+
+
+
 @dataclass
 class EvalRow:
     """One agent on the held-out walls in one mode."""
@@ -393,8 +410,13 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
     base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
     pol = MaskedPolicyAgent(policy)
     rows = []
+    env_kwargs = policy_env_kwargs(policy)
     for mode in modes:
-        env = gym.make(ENV_ID, mode=mode)
+        env = gym.make(ENV_ID, **{**env_kwargs, "mode": mode})
+        if env.observation_space.shape != pol.model.observation_space.shape:
+            raise ValueError(f"{policy}: the model sees observations of shape {pol.model.observation_space.shape}, "
+                             f"the env {env.observation_space.shape} with env_kwargs {env_kwargs} (no run config.yaml "
+                             "beside the model?)")
         results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
         for i in range(episodes):
             for name in ("planner", "policy"):

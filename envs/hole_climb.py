@@ -39,6 +39,12 @@ arm reach ``R`` (l1 + l2, 20 cm for the seed robot), all relative to the *estima
 | 14+3K - 14+6K-1 | action mask: arm j to candidate k feasible (index j K + k) | - |
 | 14+6K - 14+6K+5 | last move's outcome, one-hot: ok, unreachable, torque_limit, missed_hole, grip_lost, fell | - |
 
+With ``memory=True`` (what the training config uses) ``3 K + 1`` entries follow (93 in all
+for K = 8): how many times this episode the robot believed itself in its current stance,
+then per action ``j K + k`` in the stance that move leads to - each ``min(count, 4) / 4``.
+A deterministic policy without them can only cycle once it has looped (they are what the
+gait policy needs to break cycles; see the README's training section).
+
 Values are clipped to [-20, 20].
 
 ## Rewards
@@ -65,7 +71,7 @@ falls (fewer than two grips). Truncated by ``max_episode_steps`` (200 moves when
 ## Arguments
 
 ``gymnasium.make("kinegym/HoleClimb-v0", mode="kinematic", wall="generated", robot="climber",
-candidates=8, wall_kwargs=None, render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
+candidates=8, wall_kwargs=None, memory=False, render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
 ``route_finder`` (without one walls are not checked: the env package does not import agents).
 ``wall_kwargs`` (generated walls):
 ``cols`` (default (5, 8), an int or an inclusive range), ``rows`` ((8, 14)), ``spacing_cm``
@@ -114,7 +120,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
 
     def __init__(self, render_mode: str | None = None, mode: str = "kinematic", wall: str | HoleMap = "generated",
                  robot: str = "climber", candidates: int = 8, wall_kwargs: dict[str, Any] | None = None,
-                 route_finder: RouteFinder | None = None) -> None:
+                 route_finder: RouteFinder | None = None, memory: bool = False) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; expected one of {self.metadata['render_modes']} or None")
         if mode not in ("kinematic", "physics"):
@@ -134,7 +140,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self.sim = KinematicClimber(self.model) if mode == "kinematic" else PhysicsClimber(self.model)
         self._plans: dict[tuple[tuple[int, int, int], int, int], MovePlan | tuple[str, str]] = {}
         self._plans_wall: HoleMap | None = None
-        n_obs = 14 + 6 * candidates + len(OUTCOMES)
+        self.memory = bool(memory)
+        n_obs = 14 + 6 * candidates + len(OUTCOMES) + ((3 * candidates + 1) if self.memory else 0)
         self.observation_space = spaces.Box(-_CLIP, _CLIP, (n_obs,), np.float32)
         self.action_space = spaces.Discrete(3 * candidates)
         self._fixed_wall: HoleMap | None = None
@@ -219,6 +226,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self.moves, self.last_outcome, self.last_reason = 0, "ok", "start"
         self._prev_dist = self._true_goal_distance()
         self._history: list[int] = []
+        self._visits: dict[tuple[int, int, int], int] = {self.est_holes: 1}  # believed stances this episode
         self._update_candidates()
         return self._obs(), self._info()
 
@@ -241,6 +249,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         fell = res_outcome == "fell"
         if not fell:
             self._relocalise(arm + 1 if res_outcome == "ok" else None)
+            self._visits[self.est_holes] = self._visits.get(self.est_holes, 0) + 1
         dist = self._true_goal_distance()
         success = self.goal in self.sim.stance and not fell
         reward = 0.05 * (self._prev_dist - dist) - 0.1
@@ -327,6 +336,16 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
                 obs[base + 2 * K + k] = 1.0
         obs[base + 3 * K: base + 6 * K] = self.mask
         obs[base + 6 * K + OUTCOMES.index(self.last_outcome)] = 1.0
+        if self.memory:  # how often this episode the robot believed itself in each stance a move leads to
+            m = base + 6 * K + len(OUTCOMES)
+            visits, stance = self._visits, self.est_holes
+            obs[m] = min(visits.get(stance, 0), 4) / 4.0
+            for k, h in enumerate(self.cand):
+                if h < 0:
+                    continue
+                for arm in range(3):
+                    nxt = stance[:arm] + (h,) + stance[arm + 1:]
+                    obs[m + 1 + arm * K + k] = min(visits.get(nxt, 0), 4) / 4.0  # type: ignore[arg-type]
         return np.clip(obs, -_CLIP, _CLIP).astype(np.float32)
 
     def _info(self, success: bool = False) -> dict[str, Any]:

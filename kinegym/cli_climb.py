@@ -59,6 +59,10 @@ def cmd_climb(args: argparse.Namespace) -> int:
         raise UsageError(f"--episodes {args.episodes} must be >= 1")
     agent = load_policy(args.policy)
     kwargs: dict[str, Any] = {"mode": args.mode, "robot": args.robot, "wall": args.wall}
+    if args.policy != "planner":  # the env as the policy was trained on it (e.g. memory=True)
+        from agents.train import policy_env_kwargs
+
+        kwargs = {**policy_env_kwargs(args.policy), **kwargs}
     try:
         env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array" if args.gif else None, **kwargs)
         env.reset(seed=args.seed)

@@ -181,3 +181,28 @@ def test_100000_random_valid_actions_raise_nothing() -> None:
         assert np.isfinite(obs).all() and np.isfinite(r)
         if term or trunc:
             obs, info = env.reset()
+
+
+def test_memory_features_count_believed_stances() -> None:
+    plain = gym.make(ENV_ID)
+    env = gym.make(ENV_ID, memory=True)
+    u = env.unwrapped
+    K = u.K
+    assert plain.observation_space.shape == (68,) and env.observation_space.shape == (68 + 3 * K + 1,)
+    m = 68
+    for a in range(3 * K):  # a first move whose way back is offered
+        obs, info = env.reset(seed=4)
+        assert obs[m] == 0.25  # the start stance, seen once
+        start = u.believed_stance
+        if not info["action_mask"][a]:
+            continue
+        obs, r, term, trunc, info = env.step(a)
+        arm = a // K
+        back = u.action_for(arm, start[arm])
+        if info["outcome"] == "ok" and back is not None and info["action_mask"][back]:
+            break
+    else:
+        pytest.fail("no move with an offered way back on this wall")
+    assert obs[m] == 0.25 and obs[m + 1 + back] == 0.25  # the new stance once; the way back leads to a seen one
+    obs, r, term, trunc, info = env.step(back)
+    assert info["outcome"] == "ok" and u.believed_stance == start and obs[m] == 0.5
