@@ -221,12 +221,12 @@ class Recording:
             out[a + 2 * (b - a) // 3:b] = True
         return out
 
-    def errors_mm(self) -> dict[str, float]:
-        """Static and dynamic error of the true tip against the desired pose, in mm:
-        board-plane distance (``xy``) and per axis; ``*_rms`` and ``*_max`` over the settled
-        hold samples (static) and the drawing samples (dynamic)."""
+    def errors_mm(self, tip: np.ndarray | None = None) -> dict[str, float]:
+        """Static and dynamic error of the true tip (or ``tip``, e.g. :attr:`fk_enc`) against
+        the desired pose, in mm: board-plane distance (``xy``) and per axis; ``*_rms`` and
+        ``*_max`` over the settled hold samples (static) and the drawing samples (dynamic)."""
         out: dict[str, float] = {}
-        d = (self.tip[:, :3] - self.desired[:, :3]) * 10.0
+        d = ((self.tip if tip is None else tip)[:, :3] - self.desired[:, :3]) * 10.0
         for kind, m in (("static", self.static_samples()), ("dynamic", self.drawing())):
             if not m.any():
                 continue

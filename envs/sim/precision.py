@@ -80,12 +80,6 @@ def stairs(sim: ArmSim, axis: str, step_cm: float, steps: int, hold_s: float = 0
     return Trajectory.concat(trajs)
 
 
-def _believed(rec: Recording) -> dict[str, float]:
-    fake = Recording(rec.arm, rec.dt, rec.desired, rec.q_ref, rec.q_enc, rec.q_true, rec.torque, rec.fk_enc,
-                     rec.contact, rec.tool, rec.stroke, rec.hold)
-    return fake.errors_mm()
-
-
 def run_precision(arm: str = "thesis_rrrr", axes: Sequence[str] = ("x", "y"), speed_cm_s: float | None = None,
                   progress: object = None) -> list[PrecisionResult]:
     """Run the stairs along each of ``axes`` plus the parallel lines and the sine wave."""
@@ -105,7 +99,7 @@ def run_precision(arm: str = "thesis_rrrr", axes: Sequence[str] = ("x", "y"), sp
             rec = sim.draw(parallel_lines(sim.layout.field_centre), speed_cm_s)
         else:
             rec = sim.draw([sine_stroke(sim.layout.field_centre)], speed_cm_s)
-        out.append(PrecisionResult(name, axis, rec, rec.errors_mm(), _believed(rec)))
+        out.append(PrecisionResult(name, axis, rec, rec.errors_mm(), rec.errors_mm(rec.fk_enc)))
         if callable(progress):
             progress()
     return out
