@@ -426,6 +426,9 @@ class ArmSim:
         motor0 = np.asarray(self.phys.q_motor())
         # encoder counts from 0 at power-on (relative) or reads the motor angle (absolute)
         self._enc_zero = np.where(rel, motor0, 0.0)
+        self._enc_step = np.array([jp.encoder_step for jp in self.joints])
+        self._ticks = 0  # physics steps since power-on (keys the encoder reading)
+        self._enc_cache: tuple[int, np.ndarray] = (-1, np.zeros(4))
         # what the controller assumes at power-on: relative joints are where park is
         self.offset = np.where(rel, self.q_park, 0.0) if homing else np.where(rel, motor0, 0.0)
         self._filt_v = [0.0] * 4
@@ -446,10 +449,15 @@ class ArmSim:
 
     # ------------------------------------------------------------------ sensing
     def encoders(self) -> np.ndarray:
-        """Raw encoder readings (rad): motor angle since power-on, quantised."""
+        """Raw encoder readings (rad): motor angle since power-on, quantised. Read once per
+        physics step (the servo tick and the recording share the reading)."""
+        if self._enc_cache[0] == self._ticks:
+            return self._enc_cache[1].copy()
         raw = np.asarray(self.phys.q_motor()) - self._enc_zero
-        step = np.array([jp.encoder_step for jp in self.joints])
-        return np.where(step > 0, np.round(raw / np.where(step > 0, step, 1.0)) * step, raw)
+        step = self._enc_step
+        enc = np.where(step > 0, np.round(raw / np.where(step > 0, step, 1.0)) * step, raw)
+        self._enc_cache = (self._ticks, enc)
+        return enc.copy()
 
     def q_enc(self) -> np.ndarray:
         """Joint angles the controller believes (encoder + offset), rad."""
@@ -502,6 +510,7 @@ class ArmSim:
         self._contact()
         ph.update_yaw_inertia()
         ph.space.step(dt)
+        self._ticks += 1
         self.time_s += dt
         return torques
 
