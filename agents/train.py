@@ -175,7 +175,7 @@ def _new_run_dir(base: Path, stem: str) -> Path:
     raise RuntimeError(f"no free run directory under {base}")
 
 
-def _callbacks(cfg: dict[str, Any], run: Path, seed: int, n_envs: int, extra: Sequence[Any] = ()) -> list[Any]:
+def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, extra: Sequence[Any] = ()) -> list[Any]:
     from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
     from stable_baselines3.common.callbacks import CheckpointCallback
 
@@ -229,7 +229,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     try:
         model = MaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"), device="cpu",
                             **_model_kwargs(cfg))
-        cbs = _callbacks(cfg, run, seed, cfg["n_envs"], [trial_callback] if trial_callback else [])
+        cbs = _callbacks(cfg, run, cfg["n_envs"], [trial_callback] if trial_callback else [])
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
         model.save(run / "final_model.zip")
         if cfg["normalize"]:
@@ -289,7 +289,7 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
         env = VecNormalize.load(str(stats), env)
     try:
         model = MaskablePPO.load(ck, env=env, device="cpu", tensorboard_log=str(run / "tb"))
-        cbs = _callbacks(cfg, run, seed, cfg["n_envs"])
+        cbs = _callbacks(cfg, run, cfg["n_envs"])
         model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
                     reset_num_timesteps=False, tb_log_name="run")
         model.save(run / "final_model.zip")
