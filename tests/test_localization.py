@@ -178,3 +178,52 @@ def test_bad_inputs() -> None:
     with pytest.raises(InvalidInputError, match=r"expected \(N, 2\)"):
         HoleMap(ids=np.zeros((0, 2), int), xy=np.zeros((0, 2)))
     assert body_to_wall(hand_positions(SEED_ANGLES), [0, 0, 0]).shape == (3, 2)
+
+
+@pytest.mark.parametrize("sigma_deg", [0.1, 1.0])
+def test_scalar_fit_matches_the_vectorised_fit(sigma_deg: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The plain-Python variable-projection fit (tracking) and the numpy Gauss-Newton fit
+    (global search), both run to convergence, reach the same weighted optimum; the default
+    two steps are within 1e-3 of its chi-square."""
+    from kinematics import localization
+    from kinematics.localization import _fit, _fit_one
+
+    monkeypatch.setattr(localization, "_GN_STEPS", 8)
+
+    wall = HoleMap.grid(12, 12, spacing=20, jitter=0.5, seed=5)
+    loc = Localizer(wall, GEOM, NoiseModel(sigma_angle=math.radians(sigma_deg), sigma_map=0.01))
+    sim = GripSimulator(loc.index, GEOM, math.radians(sigma_deg), seed=1)
+    xy = wall.xy
+    for k in range(200):
+        g = sim.grip()
+        hx, hy, cov, w = loc._measure(g.q_measured)
+        v = list(g.holes)
+        if k % 2:  # a neighbouring, wrong triple: a poor fit, but both must agree on it
+            v[k % 3] = int(wall.within(xy[v[k % 3]], 25.0)[0])
+        x, y, th, chi2, res = _fit_one(xy[v, 0].tolist(), xy[v, 1].tolist(), hx, hy, w, steps=8)
+        weights = np.array([[[c, -b], [-b, a]] for a, b, c in cov]) / np.array(
+            [a * c - b * b for a, b, c in cov])[:, None, None]
+        pose, chi2v, resv = _fit(xy[v][None], np.array([hx, hy]).T, weights)
+        if chi2 < 50:  # a clear optimum (a bad triple may have several local ones)
+            assert chi2v[0] == pytest.approx(chi2, rel=1e-9, abs=1e-9)
+            assert np.allclose(pose[0, :2], [x, y], atol=1e-7)
+            assert abs(math.remainder(pose[0, 2] - th, 2 * math.pi)) < 1e-8
+            assert np.allclose(resv[0], res, atol=1e-7)
+            fast = _fit_one(xy[v, 0].tolist(), xy[v, 1].tolist(), hx, hy, w, steps=2)
+            assert chi2 - 1e-9 <= fast[3] <= chi2 + 1e-3
+
+
+def test_tracking_runner_up_is_built_on_demand() -> None:
+    wall = HoleMap.grid(30, 30, spacing=3, jitter=0.2, seed=2)  # dense: several holes near the prediction
+    loc = Localizer(wall, GEOM, NoiseModel(sigma_angle=math.radians(0.5), sigma_map=0.01))
+    sim = GripSimulator(loc.index, GEOM, math.radians(0.5), seed=4)
+    seen = 0
+    path = sim.walk(40)
+    for prev, g in zip(path, path[1:]):
+        fix = loc.track(prev.holes, g.q_measured, g.moved_arm)
+        assert fix.holes == g.holes
+        if fix.n_candidates > 1:
+            r = fix.runner_up
+            assert r is not None and r.holes != fix.holes and r.chi2 >= fix.best.chi2 and r is fix.runner_up
+            seen += 1
+    assert seen > 0
