@@ -15,9 +15,11 @@ player that has choices to break takes a ``seed`` and draws from its own
   reduced by its symmetries (8 on a square board), immediate-win and forced-block
   detection, cut-offs from lines that are dead for one side, and move ordering by line
   potential. The player consults an opening book (:mod:`agents.book`: exact values of
-  every position with few stones, computed by this solver) where search alone is too slow,
-  solves exactly under a time budget after that, and falls back to an iterative-deepening
-  heuristic search only if the budget runs out first (reported as ``exact=False``).
+  every position with few stones, computed by this solver) where search alone is too slow.
+  After that it asks, with half its time budget, whether it can force a win; unanswered in
+  time it plays for a draw, which it proves move by move (that proof may run on to a hard
+  limit: never losing comes first). Only past the hard limit does an iterative-deepening
+  heuristic search decide (reported as ``source="heuristic"``, ``exact=False``).
   Among the moves of the best value it samples by line potential (a softmax, seeded), so
   it plays sharply against weak players and still varies its games.
 * :class:`RandomPlayer` - uniform over the legal moves.
@@ -201,6 +203,18 @@ class Solver:
         self._deadline = math.inf if deadline is None else deadline
         me, op = _sides(board)
         return self._negamax(me, op, self.t.encode(me), self.t.encode(op), alpha, beta)
+
+    def table_move(self, board: Board) -> int | None:
+        """The best move the transposition table holds for ``board`` (from the last search
+        that reached it: after a search proved a win, the winning move), or None."""
+        me, op = _sides(board)
+        emes, eops = self.t.encode(me), self.t.encode(op)
+        keys = [(a << 64) | b for a, b in zip(emes, eops)]
+        key = min(keys)
+        code = self.table.get(key)
+        if code is None or code < 9:
+            return None
+        return self._inverse[keys.index(key)][code // 9 - 1]
 
     def child_value(self, board: Board, cell: int, deadline: float | None = None) -> int:
         """Exact value of playing ``cell`` in ``board``, for the side playing it."""
@@ -438,10 +452,12 @@ class StrongPlayer:
 
     Args:
         seed: seeds the choice among the moves of the best value.
-        time_budget_s: seconds per move the search aims at; ``None`` = unbounded. The budget
-            is soft: the exact search may run on to ``hard_limit_s`` (never losing comes
-            first), and only then does an iterative-deepening heuristic search over the moves
-            not proven to lose decide (``Analysis.exact`` is then False).
+        time_budget_s: seconds per move the search aims at; ``None`` = unbounded (exact
+            values). Half of it goes to "can I force a win?"; unanswered, the player proves
+            a move that keeps a draw (``Analysis.exact`` False: the value is a lower bound).
+            That proof may run on to ``hard_limit_s`` (never losing comes first); only then
+            does an iterative-deepening heuristic search over the moves not proven to lose
+            decide (``source="heuristic"``).
         book: use the opening book where one exists for the game.
         temperature: softmax temperature over line potential when choosing among the moves
             of the best value (0 = always the highest potential, ties at random).
@@ -542,22 +558,30 @@ class StrongPlayer:
                 best = max(vals.values())
                 bm = [c for c in order if vals[c] == best]
                 return done(Analysis(best, bm, True, "book", move_values=vals))
-        # the budget is soft: exactness comes first, so the exact search may run on to
-        # ``hard_limit_s``; only past that does the heuristic search decide
+        # never losing comes first: the search that proves a move keeps the value may run on
+        # to ``hard_limit_s``; only past that does the heuristic search decide. Whether the
+        # side to move can *win* is asked with half the budget: unanswered in time, a draw is
+        # what it plays for (the value is then a lower bound, ``exact=False``)
         deadline = None if self.time_budget_s is None else t0 + max(self.time_budget_s, self.hard_limit_s)
         try:
             root = self._book_value(board) if self.use_book else None
-            if root is None and self.use_book and self._parents_lower_bound(board) >= DRAW:
-                # the book says the side to move cannot be losing: only "can it win?" is
-                # open - a null-window search, given part of the budget; unanswered in time,
-                # a draw is what it can surely keep
+            exact = root is not None
+            if root is None:
+                quick = None if self.time_budget_s is None else t0 + 0.5 * self.time_budget_s
                 try:
-                    quick = None if self.time_budget_s is None else t0 + 0.5 * self.time_budget_s
                     root = WIN if solver.bounded(board, DRAW, WIN, quick) >= WIN else DRAW
+                    exact = True  # a win, or at most a draw (the loop below tells draw from loss)
                 except SearchTimeout:
                     root = DRAW
-            if root is None:
-                root = solver.value(board, deadline)
+            if not all_best and root > LOSS:
+                # one null-window search "value >= root?" in the solver's own move order: its
+                # cut-off move keeps the value, and is tried first below (testing the sampled
+                # order move by move pays for refuting every weaker move before it)
+                if solver.bounded(board, root - 1, root, deadline) < root:
+                    root, exact = LOSS, True  # (only after an unanswered win probe: lost after all)
+                first = solver.table_move(board)
+                if first is not None and first in order:
+                    order = [first] + [c for c in order if c != first]
             best_moves, values = [], {}
             for c in order:
                 v = -solver.bounded(board.play(c), -root, -root + 1, deadline)  # is this move >= root?
@@ -568,36 +592,13 @@ class StrongPlayer:
                         break
                 else:
                     values[c] = v  # an upper bound below root
-            return done(Analysis(root, best_moves, True, "search", complete=all_best, move_values=values))
+            if not best_moves:  # no move keeps a draw: the position was lost already
+                return done(Analysis(LOSS, list(order if all_best else order[:1]), True, "search",
+                                     complete=all_best, move_values={c: LOSS for c in order}))
+            return done(Analysis(root, best_moves, exact, "search", complete=all_best, move_values=values))
         except SearchTimeout:
             move = self._fallback(board, order, solver, t0)
             return done(Analysis(DRAW, [move], False, "heuristic", complete=False))
-
-    @staticmethod
-    def _parents_lower_bound(board: Board) -> int:
-        """A lower bound on the value for the side to move from the book's values of the
-        positions the last move may have come from (one of the opponent's stones taken
-        back): whichever it was, the opponent's move could not raise its own value, so
-        ``value >= -value(parent)``; the bound is the least over the candidates (-1 if any
-        is missing from the book)."""
-        from agents import book as _book
-
-        got = _book.load(board.game)
-        if got is None or board.n_stones - 1 > got[1] or board.n_stones == 0:
-            return LOSS
-        values, _ = got
-        last = board.o if board.to_move == X else board.x  # the stones of who moved last
-        bound = WIN
-        m = last
-        while m:
-            bit = m & -m
-            m ^= bit
-            parent = Board(board.game, board.x & ~bit, board.o & ~bit)
-            v = values.get(canonical_key(parent))
-            if v is None:
-                return LOSS
-            bound = min(bound, -v)
-        return bound
 
     @staticmethod
     def _book_value(board: Board) -> int | None:

@@ -28,7 +28,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--games", type=int, default=1000, help="games per side and opponent")
     ap.add_argument("--quick", action="store_true", help="50 games per side and opponent")
+    ap.add_argument("--opponents", default="random,thesis,self", help="comma-separated subset of random,thesis,self")
     args = ap.parse_args()
+    opponents = [o.strip() for o in args.opponents.split(",") if o.strip()]
+    if not opponents or set(opponents) - {"random", "thesis", "self"}:
+        ap.error(f"--opponents {args.opponents!r}; expected a comma-separated subset of random,thesis,self")
     games = 50 if args.quick else args.games
 
     ts = []
@@ -43,7 +47,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|")
     thesis_tally = {"games": 0, "losses": 0, "draws": 0}
     all_times: list[float] = []
-    for opp_name in ("random", "thesis", "self"):
+    for opp_name in opponents:
         solver = Solver(THESIS)
         for strong_side in (X, O):
             wins = draws = losses = 0
@@ -78,6 +82,8 @@ def main() -> None:
     print(f"\nstrong player over all {len(t)} moves: median {np.median(t):.1f} ms, p95 {np.percentile(t, 95):.1f} ms, "
           f"max {t.max():.0f} ms")
     g = thesis_tally["games"]
+    if not g:
+        return
     print(f"thesis player against the strong player: lost {thesis_tally['losses']} of {g} "
           f"({thesis_tally['losses'] / g:.1%}), drew {thesis_tally['draws']} ({thesis_tally['draws'] / g:.1%}), "
           f"won {g - thesis_tally['losses'] - thesis_tally['draws']}")

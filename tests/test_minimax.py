@@ -255,3 +255,34 @@ def test_deterministic_strong_player_repeats_itself_under_any_load() -> None:
     assert game(3) == game(3)
     assert "heuristic" in sources  # the budget really ran out
     assert game(3) != game(4)
+
+
+def test_win_probe_out_of_time_still_proves_a_move_that_keeps_a_draw() -> None:
+    """Off the book, the player first asks "can I force a win?" with half its budget; out of
+    time it plays a move it proves keeps at least a draw (value a lower bound, exact False).
+    The move is checked against the exact value of the position after it."""
+    from agents.minimax import RandomPlayer
+
+    checked = 0
+    for seed in range(12):
+        rp, b = RandomPlayer(seed=seed), THESIS.empty()
+        for _ in range(6):
+            b = b.play(rp.choose(b))
+        if b.is_over:
+            continue
+        sp = StrongPlayer(seed=0, deterministic=True, time_budget_s=0.002, hard_limit_s=30)
+        move = sp.choose(b)
+        if sp.last.source != "search" or sp.last.exact:
+            continue
+        assert sp.last.value == 0 and b.is_legal(move)
+        assert -Solver(THESIS).value(b.play(move)) >= 0, str(b)
+        checked += 1
+        if checked == 3:
+            break
+    assert checked == 3
+
+
+def test_a_lost_position_is_reported_lost() -> None:
+    b = CLASSIC.parse("XX.|.O.|X.O")  # O to move; X threatens the top row and the left column
+    a = StrongPlayer(seed=0).analyse(b)
+    assert a.value == -1 and a.exact and sorted(a.best_moves) == sorted(b.legal_moves())
