@@ -23,7 +23,15 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from envs.sim.climber import ClimberModel, MovePlan, candidate_holes, plan_move, start_stances
+from envs.sim.climber import (
+    ClimberModel,
+    MovePlan,
+    candidate_holes,
+    hop_counts,
+    plan_move,
+    stance_hops,
+    start_stances,
+)
 from kinematics.localization import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
@@ -106,34 +114,16 @@ class GaitPlanner:
         self._moves[st] = [m for m in self.moves(st) if (m[0], m[1]) != (arm, hole)]
 
     def hops(self, goal: int) -> list[int]:
-        """Per hole: hops to ``goal`` through holes at most one arm span apart (breadth-first;
-        a large number where no chain of such hops leads to the goal)."""
+        """Per hole: hops to ``goal`` through holes at most one arm span apart
+        (:func:`envs.sim.climber.hop_counts`)."""
         got = self._hops.get(goal)
         if got is None:
-            far = 1 << 20
-            got = [far] * len(self.holes)
-            got[goal] = 0
-            frontier = [goal]
-            while frontier:
-                nxt = []
-                for h in frontier:
-                    for j in self.holes.within(self.holes.xy[h], self.span).tolist():
-                        if got[j] == far:
-                            got[j] = got[h] + 1
-                            nxt.append(j)
-                frontier = nxt
-            self._hops[goal] = got
+            got = self._hops[goal] = hop_counts(self.holes, goal, self.span)
         return got
 
     def heuristic(self, stance: Stance, goal: int) -> float:
-        """Admissible lower bound on the moves left. A move moves one arm, and its old and new
-        holes both lie within the circle of the move (radius <= reach), so one move changes
-        one arm's hop count by at most one. At the end one arm holds the goal (0 hops) and
-        the others lie within one span of it (<= 1 hop): so at least
-        ``sum_k max(0, hops_k - 1)`` moves, plus one if no arm holds the goal yet."""
-        hop = self.hops(goal)
-        hs = [hop[h] for h in stance]
-        return float(sum(max(0, v - 1) for v in hs) + (0 if min(hs) == 0 else 1))
+        """Admissible lower bound on the moves left (:func:`envs.sim.climber.stance_hops`)."""
+        return float(stance_hops(self.hops(goal), stance))
 
     def plan(self, start: Sequence[int], goal: int, max_expansions: int = 20_000) -> Route:
         """A route from stance ``start`` until some arm holds hole ``goal`` (map row)."""

@@ -68,6 +68,8 @@ __all__ = [
     "min_enclosing_circle",
     "candidate_holes",
     "start_stances",
+    "hop_counts",
+    "stance_hops",
 ]
 
 #: Move outcomes, in the order the observation encodes them.
@@ -868,6 +870,35 @@ def candidate_holes(holes: HoleMap, stance: Sequence[int], k: int, radius: float
     near = [h for h in holes.within((cx, cy), radius).tolist() if h not in stance]
     near.sort(key=lambda h: ((xy[h][0] - cx) ** 2 + (xy[h][1] - cy) ** 2, h))
     return near[:k]
+
+
+def hop_counts(holes: HoleMap, goal: int, span: float) -> list[int]:
+    """Per hole: hops to hole ``goal`` through holes at most ``span`` cm apart (breadth-first;
+    ``1 << 20`` where no chain of such hops reaches the goal)."""
+    far = 1 << 20
+    got = [far] * len(holes)
+    got[goal] = 0
+    frontier = [goal]
+    while frontier:
+        nxt = []
+        for h in frontier:
+            for j in holes.within(holes.xy[h], span).tolist():
+                if got[j] == far:
+                    got[j] = got[h] + 1
+                    nxt.append(j)
+        frontier = nxt
+    return got
+
+
+def stance_hops(hops: Sequence[int], stance: Sequence[int]) -> int:
+    """A lower bound on the moves from ``stance`` until an arm holds the goal, from
+    :func:`hop_counts` with ``span`` = one arm span (twice the reach). A move changes one
+    arm's hole, and its old and new holes both lie within the move's circle (radius at most
+    the reach), so one move lowers one arm's hop count by at most one; at the end one arm
+    holds the goal (0 hops) and the others lie within one span of it (at most 1 hop): so at
+    least ``sum_k max(0, hops_k - 1)`` moves, plus one if no arm holds the goal yet."""
+    hs = [hops[h] for h in stance]
+    return sum(max(0, v - 1) for v in hs) + (0 if min(hs) == 0 else 1)
 
 
 def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> list[tuple[int, int, int]]:
