@@ -18,7 +18,10 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    given.
 3. **Homography.** Every intersection of a column line with a row line is a point of the
    ideal grid; a least-squares homography maps grid coordinates (cells) to pixels. Its
-   reprojection error and the count of grid points found are the grid's confidence.
+   reprojection error and the count of grid points found are the grid's confidence. A
+   lattice whose cells grow more than 3 x from one corner of the field to another (a camera
+   tilted 35 deg manages about 2.6 x) was extrapolated from wrong lines: the next lattice
+   hypothesis is tried instead.
 4. **Cells.** The ink map is warped onto a square grid of ``cell_px`` per cell, the grid
    lines are masked out, and each cell's ink is measured: its amount (empty or not,
    against a threshold set from the contrast of the grid lines themselves, so faint
@@ -568,6 +571,14 @@ class BoardReader:
         side = math.sqrt(max(cv2.contourArea(corners.astype(np.float32)), 0.0))
         if side < 0.1 * diag:
             raise NoBoardError("the grid found is too small to read")
+        # a camera tilted up to ~35 deg scales the field's cells by at most ~2.5 from one
+        # corner to another; a lattice that implies more was extrapolated from wrong lines
+        cells = np.array([[c, r] for c in (0, n - 1) for r in (0, n - 1)], float)
+        areas = [abs(cv2.contourArea(_apply(H, q + [[0, 0], [1, 0], [1, 1], [0, 1]]).astype(np.float32)))
+                 for q in cells]
+        if max(areas) > 3.0 * max(min(areas), 1e-9):
+            raise NoBoardError(f"the lattice implies cells {max(areas) / max(min(areas), 1e-9):.1f} x larger "
+                               "in one corner than in another; no camera tilts that much")
         _, coverage = self._line_contrast(d, H, n)
         if coverage < 0.6:
             raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
