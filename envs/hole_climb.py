@@ -45,6 +45,15 @@ then per action ``j K + k`` in the stance that move leads to - each ``min(count,
 A deterministic policy without them can only cycle once it has looped (they are what the
 gait policy needs to break cycles; see the README's training section).
 
+With ``hints=True`` ``6 K + 1`` entries follow (142 in all for K = 8 with ``memory``): the
+map's lower bound on the moves left from the believed stance
+(:func:`envs.sim.climber.stance_hops`: hops of the held holes to the goal through holes one
+arm span apart) as ``min(h, 20) / 10``; per action ``j K + k`` how the move changes that
+bound, clipped to [-2, 2] and halved; per action whether that move already failed from this
+stance this episode (1) or not (0). The robot knows the map, so these are its own
+knowledge, not the planner's answer: they say which moves head for the goal, not which
+route gets there.
+
 Values are clipped to [-20, 20].
 
 ## Rewards
@@ -71,13 +80,18 @@ falls (fewer than two grips). Truncated by ``max_episode_steps`` (200 moves when
 ## Arguments
 
 ``gymnasium.make("kinegym/HoleClimb-v0", mode="kinematic", wall="generated", robot="climber",
-candidates=8, wall_kwargs=None, memory=False, render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
+candidates=8, wall_kwargs=None, memory=False, hints=False, wall_pool=0, wall_pool_seed=0,
+render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
 ``route_finder`` (without one walls are not checked: the env package does not import agents).
 ``wall_kwargs`` (generated walls):
 ``cols`` (default (5, 8), an int or an inclusive range), ``rows`` ((8, 14)), ``spacing_cm``
 (15.0), ``jitter_cm`` (1.0), ``missing`` (0.08 share of holes left out). The seed's 20 cm
 wall needs ``robot="climber_long"`` (see the README: the seed robot's 10 cm links cannot
 climb it with this gait).
+``wall_pool=N`` (training): instead of a new wall every reset, each reset draws one of ``N``
+tasks (wall, start, goal), task ``i`` made once from the seed ``(wall_pool_seed, i)``; a task
+keeps its route check and its move judgements between episodes, which makes resets free and
+steps several times faster. Evaluate on fresh walls (``wall_pool=0``).
 """
 
 from __future__ import annotations
@@ -97,7 +111,9 @@ from envs.sim.climber import (
     MovePlan,
     PhysicsClimber,
     candidate_holes,
+    hop_counts,
     plan_move,
+    stance_hops,
     start_stances,
 )
 from kinematics.localization import AmbiguousFixError, Fix, HoleMap, Localizer, NoFixError, NoiseModel
@@ -120,7 +136,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
 
     def __init__(self, render_mode: str | None = None, mode: str = "kinematic", wall: str | HoleMap = "generated",
                  robot: str = "climber", candidates: int = 8, wall_kwargs: dict[str, Any] | None = None,
-                 route_finder: RouteFinder | None = None, memory: bool = False) -> None:
+                 route_finder: RouteFinder | None = None, memory: bool = False, hints: bool = False,
+                 wall_pool: int = 0, wall_pool_seed: int = 0) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; expected one of {self.metadata['render_modes']} or None")
         if mode not in ("kinematic", "physics"):
@@ -130,7 +147,16 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         unknown = set(wall_kwargs or {}) - set(WALL_DEFAULTS)
         if unknown:
             raise ValueError(f"wall_kwargs {sorted(unknown)} unknown; expected keys {sorted(WALL_DEFAULTS)}")
+        if not (isinstance(wall_pool, int) and wall_pool >= 0):
+            raise ValueError(f"wall_pool={wall_pool!r}; expected an integer >= 0 (0 = a new wall every reset)")
+        if wall_pool and wall != "generated":
+            raise ValueError(f"wall_pool={wall_pool} needs wall='generated', not {wall!r}")
+        if not isinstance(wall_pool_seed, int):
+            raise ValueError(f"wall_pool_seed={wall_pool_seed!r}; expected an integer")
         self.render_mode, self.mode, self.K = render_mode, mode, candidates
+        self.wall_pool, self.wall_pool_seed = wall_pool, wall_pool_seed
+        # pool index -> (holes, start, goal, planner moves, hop counts, stance cache)
+        self._pool: dict[int, tuple[HoleMap, tuple[int, int, int], int, int, list[int], dict]] = {}
         self.route_finder = route_finder
         self.robot_name = robot
         self.model = ClimberModel.from_config(robot)
@@ -138,10 +164,11 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self.wall_kwargs = {**WALL_DEFAULTS, **(wall_kwargs or {})}
         self.reach = float(np.max(self.model.geom.l1 + self.model.geom.l2))
         self.sim = KinematicClimber(self.model) if mode == "kinematic" else PhysicsClimber(self.model)
-        self._plans: dict[tuple[tuple[int, int, int], int, int], MovePlan | tuple[str, str]] = {}
-        self._plans_wall: HoleMap | None = None
-        self.memory = bool(memory)
-        n_obs = 14 + 6 * candidates + len(OUTCOMES) + ((3 * candidates + 1) if self.memory else 0)
+        # believed stance -> (candidate holes, action mask): a function of the stance on one wall
+        self._stance_cache: dict[tuple[int, int, int], tuple[list[int], np.ndarray]] = {}
+        self.memory, self.hints = bool(memory), bool(hints)
+        n_obs = (14 + 6 * candidates + len(OUTCOMES) + ((3 * candidates + 1) if self.memory else 0)
+                 + ((6 * candidates + 1) if self.hints else 0))
         self.observation_space = spaces.Box(-_CLIP, _CLIP, (n_obs,), np.float32)
         self.action_space = spaces.Discrete(3 * candidates)
         self._fixed_wall: HoleMap | None = None
@@ -154,35 +181,46 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self.holes: HoleMap | None = None
 
     # ------------------------------------------------------------------ walls
-    def _draw_range(self, key: str) -> float:
+    def _draw_range(self, key: str, rng: np.random.Generator) -> float:
         v = self.wall_kwargs[key]
         if isinstance(v, (tuple, list)):
             lo, hi = v
             if isinstance(lo, int):
-                return int(self.np_random.integers(lo, hi + 1))
-            return float(self.np_random.uniform(lo, hi))
+                return int(rng.integers(lo, hi + 1))
+            return float(rng.uniform(lo, hi))
         return v
 
-    def _make_wall(self) -> tuple[HoleMap, tuple[int, int, int], int, int]:
+    def _pool_task(self) -> tuple[HoleMap, tuple[int, int, int], int, int]:
+        """One of the ``wall_pool`` tasks (wall, start, goal): task ``i`` is made once, from its
+        own seed ``(wall_pool_seed, i)``, and keeps its move judgements between episodes."""
+        i = int(self.np_random.integers(self.wall_pool))
+        task = self._pool.get(i)
+        if task is None:
+            holes, start, goal, moves = self._make_wall(np.random.default_rng([self.wall_pool_seed, i]))
+            task = self._pool[i] = (holes, start, goal, moves, hop_counts(holes, goal, 2.0 * self.reach), {})
+        self._hops, self._stance_cache = task[4], task[5]
+        return task[:4]
+
+    def _make_wall(self, rng: np.random.Generator) -> tuple[HoleMap, tuple[int, int, int], int, int]:
         """A wall with a start stance, a goal hole and the route finder's route length
-        (-1 without a route finder: the wall is then not checked)."""
+        (-1 without a route finder: the wall is then not checked), all drawn from ``rng``."""
         for _ in range(30):
             if self._fixed_wall is not None:
                 holes = self._fixed_wall
             else:
-                cols, rows = int(self._draw_range("cols")), int(self._draw_range("rows"))
-                holes = HoleMap.grid(cols, rows, float(self._draw_range("spacing_cm")),
-                                     float(self._draw_range("jitter_cm")), float(self._draw_range("missing")),
-                                     seed=int(self.np_random.integers(2**31)), name=f"generated {cols}x{rows}")
+                cols, rows = int(self._draw_range("cols", rng)), int(self._draw_range("rows", rng))
+                holes = HoleMap.grid(cols, rows, float(self._draw_range("spacing_cm", rng)),
+                                     float(self._draw_range("jitter_cm", rng)), float(self._draw_range("missing", rng)),
+                                     seed=int(rng.integers(2**31)), name=f"generated {cols}x{rows}")
             starts = start_stances(self.model, holes)
             if not starts:
                 if self._fixed_wall is not None:
                     break
                 continue
-            start = starts[int(self.np_random.integers(min(len(starts), 12)))]
+            start = starts[int(rng.integers(min(len(starts), 12)))]
             ys = holes.xy[:, 1]
             top = np.flatnonzero(ys >= ys.max() - 0.5 * holes.spacing)
-            first = int(self.np_random.integers(len(top)))
+            first = int(rng.integers(len(top)))
             goals = [int(top[first])] + ([int(g) for g in top if int(g) != int(top[first])]
                                          if self._fixed_wall is not None else [])
             for goal in goals:  # a fixed wall: the other top holes before giving up
@@ -215,7 +253,14 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         return self._begin_episode()
 
     def _begin_episode(self) -> tuple[np.ndarray, dict]:
-        self.holes, start, self.goal, self.planner_moves = self._make_wall()
+        if self.wall_pool:
+            self.holes, start, self.goal, self.planner_moves = self._pool_task()
+        else:
+            previous = self.holes
+            self.holes, start, self.goal, self.planner_moves = self._make_wall(self.np_random)
+            if self.holes is not previous:
+                self._stance_cache = {}
+            self._hops = hop_counts(self.holes, self.goal, 2.0 * self.reach) if self.hints else []
         self.sim.reset(self.holes, start)
         self.loc = self._localizer(self.holes)
         # the robot is told where it starts (as an operator hangs it on the wall); from then
@@ -227,6 +272,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self._prev_dist = self._true_goal_distance()
         self._history: list[int] = []
         self._visits: dict[tuple[int, int, int], int] = {self.est_holes: 1}  # believed stances this episode
+        self._failed: set[tuple[tuple[int, int, int], int, int]] = set()  # (stance, arm, hole) that failed
         self._update_candidates()
         return self._obs(), self._info()
 
@@ -246,6 +292,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             res = self.sim.move(arm, hole)
             res_outcome, res_reason = res.outcome, res.reason
         self.last_outcome, self.last_reason = res_outcome, res_reason
+        if res_outcome != "ok":
+            self._failed.add((self.est_holes, arm, hole))
         fell = res_outcome == "fell"
         if not fell:
             self._relocalise(arm + 1 if res_outcome == "ok" else None)
@@ -293,23 +341,20 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     def _update_candidates(self) -> None:
         """The K holes nearest the holes the robot believes it holds (not held), and which
         arm may go to each (the robot's own gait model, judged on that belief)."""
-        holes = self.holes
-        near = candidate_holes(holes, self.est_holes, self.K, 2.0 * self.reach)  # type: ignore[arg-type]
-        self.cand = (near + [-1] * self.K)[: self.K]
-        mask = np.zeros(3 * self.K, dtype=bool)
-        if self._plans_wall is not holes:
-            self._plans, self._plans_wall = {}, holes
         stance = self.est_holes
-        for k, h in enumerate(self.cand):
-            if h < 0:
-                continue
-            for arm in range(3):
-                key = (stance, arm, h)
-                plan = self._plans.get(key)
-                if plan is None:
-                    plan = self._plans[key] = plan_move(self.model, holes, stance, arm, h, 0.0)  # type: ignore[arg-type]
-                mask[arm * self.K + k] = isinstance(plan, MovePlan)
-        self.mask = mask
+        got = self._stance_cache.get(stance)
+        if got is None:
+            holes = self.holes
+            near = candidate_holes(holes, stance, self.K, 2.0 * self.reach)  # type: ignore[arg-type]
+            cand = (near + [-1] * self.K)[: self.K]
+            mask = np.zeros(3 * self.K, dtype=bool)
+            for k, h in enumerate(cand):
+                if h >= 0:
+                    for arm in range(3):
+                        plan = plan_move(self.model, holes, stance, arm, h, 0.0)  # type: ignore[arg-type]
+                        mask[arm * self.K + k] = isinstance(plan, MovePlan)
+            got = self._stance_cache[stance] = (cand, mask)
+        self.cand, self.mask = list(got[0]), got[1].copy()
 
     def _obs(self) -> np.ndarray:
         K, R = self.K, self.reach
@@ -346,6 +391,18 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
                 for arm in range(3):
                     nxt = stance[:arm] + (h,) + stance[arm + 1:]
                     obs[m + 1 + arm * K + k] = min(visits.get(nxt, 0), 4) / 4.0  # type: ignore[arg-type]
+        if self.hints:  # the map's lower bound on the moves left, now and per move; moves failed here
+            m = base + 6 * K + len(OUTCOMES) + ((3 * K + 1) if self.memory else 0)
+            stance, hops = self.est_holes, self._hops
+            now = stance_hops(hops, stance)
+            obs[m] = min(now, 20) / 10.0
+            for k, h in enumerate(self.cand):
+                if h < 0:
+                    continue
+                for arm in range(3):
+                    nxt = stance[:arm] + (h,) + stance[arm + 1:]
+                    obs[m + 1 + arm * K + k] = max(-2, min(2, stance_hops(hops, nxt) - now)) / 2.0
+                    obs[m + 1 + 3 * K + arm * K + k] = float((stance, arm, h) in self._failed)
         return np.clip(obs, -_CLIP, _CLIP).astype(np.float32)
 
     def _info(self, success: bool = False) -> dict[str, Any]:

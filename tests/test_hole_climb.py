@@ -44,6 +44,9 @@ def test_gymnasium_and_sb3_checkers_pass() -> None:
     env = gym.make(ENV_ID)
     check_env(env.unwrapped)
     sb3_check_env(gym.make(ENV_ID))
+    full = gym.make(ENV_ID, memory=True, hints=True, wall_pool=4)  # what training uses
+    check_env(full.unwrapped)
+    sb3_check_env(gym.make(ENV_ID, memory=True, hints=True, wall_pool=4))
     assert env.spec.max_episode_steps == 200
     assert env.unwrapped.metadata["render_fps"] > 0
 
@@ -206,3 +209,52 @@ def test_memory_features_count_believed_stances() -> None:
     assert obs[m] == 0.25 and obs[m + 1 + back] == 0.25  # the new stance once; the way back leads to a seen one
     obs, r, term, trunc, info = env.step(back)
     assert info["outcome"] == "ok" and u.believed_stance == start and obs[m] == 0.5
+
+
+def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
+    """hints: the map's lower bound on the moves left is admissible (the planner's shortest
+    route is never shorter), each feasible move changes it by -1..1, and a move that failed
+    from a stance is flagged there."""
+    from agents.gait_planner import GaitPlanner
+    from envs.sim.climber import stance_hops
+
+    env = gym.make(ENV_ID, memory=True, hints=True)
+    u = env.unwrapped
+    K = u.K
+    assert env.observation_space.shape == (68 + 3 * K + 1 + 6 * K + 1,)
+    m = 68 + 3 * K + 1
+    for seed in range(4):
+        obs, info = env.reset(seed=seed)
+        now = stance_hops(u._hops, u.believed_stance)
+        assert obs[m] == pytest.approx(min(now, 20) / 10)
+        shortest = GaitPlanner(u.model, u.holes, weight=1.0, candidates=K).plan(u.believed_stance, u.goal)
+        assert shortest.found and len(shortest.moves) >= now
+        deltas = obs[m + 1: m + 1 + 3 * K] * 2
+        feasible = info["action_mask"]
+        assert feasible.any() and set(np.round(deltas[feasible]).tolist()) <= {-1.0, 0.0, 1.0}
+        assert not obs[m + 1 + 3 * K:].any()  # nothing has failed yet
+    # a masked (infeasible) move fails and is then flagged from this stance
+    obs, info = env.reset(seed=0)
+    bad = next(a for a in range(3 * K) if not info["action_mask"][a] and u.candidates[a % K] >= 0)
+    obs, r, term, trunc, info = env.step(bad)
+    assert info["outcome"] != "ok"
+    assert obs[m + 1 + 3 * K + bad] == 1.0 and obs[m + 1 + 3 * K:].sum() == 1.0
+
+
+def test_wall_pool_reuses_fixed_tasks_and_stays_deterministic() -> None:
+    env = gym.make(ENV_ID, wall_pool=3, wall_pool_seed=7)
+    seen = set()
+    for s in range(12):
+        obs, info = env.reset(seed=s)
+        seen.add((info["wall"], info["goal"], info["planner_moves"], env.unwrapped.holes.xy.tobytes()))
+    assert len(seen) == 3  # three tasks, each made once and drawn again
+    again = gym.make(ENV_ID, wall_pool=3, wall_pool_seed=7)
+    assert rollout_digest(env, 5, 150) == rollout_digest(again, 5, 150)
+    other = gym.make(ENV_ID, wall_pool=3, wall_pool_seed=8)
+    assert rollout_digest(other, 5, 150) != rollout_digest(again, 5, 150)
+    restored = pickle.loads(pickle.dumps(env))
+    assert rollout_digest(restored, 5, 150) == rollout_digest(again, 5, 150)
+    with pytest.raises(ValueError, match="wall_pool=-1"):
+        HoleClimbEnv(wall_pool=-1)
+    with pytest.raises(ValueError, match="needs wall='generated'"):
+        HoleClimbEnv(wall="seed_4x4", wall_pool=4)
