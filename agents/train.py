@@ -10,17 +10,21 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m agents.train ...``):
   schedules such as ``lin_3e-4``), validated on load (file, key and bad value named).
 * **Training**: sb3-contrib's MaskablePPO (masks through the env's ``action_masks()``), a
   ``SubprocVecEnv`` when ``n_envs > 1`` (forkserver workers: keep the ``__main__`` guard),
-  ``torch.set_num_threads(1)`` by default (several times faster on 2 cores).
+  ``torch.set_num_threads(1)`` by default (several times faster on 2 cores); ``--minutes M``
+  stops after ``M`` minutes of wall time and saves the final model (a time budget instead
+  of a step count).
 * **A run directory** holds ``config.yaml`` (resolved), ``command.txt``, ``monitor/``
   (Monitor CSVs with ``is_success``), ``tb/`` (TensorBoard), ``checkpoints/`` (model,
   optimiser, step counter and normalisation statistics every ``checkpoint_freq`` steps),
   ``best/best_model.zip`` (by a masked evaluation on validation walls), ``final_model.zip``,
   ``evaluations.npz`` and ``learning_curve.png``. ``--resume RUN`` continues the last
   checkpoint of ``RUN`` into a new directory ``RUN-resume<k>``; nothing of ``RUN`` is touched.
-* **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...``; the
-  evaluation callback uses the validation stream (seed ``VALIDATION_SEED``); ``evaluate``
-  uses the held-out walls ``HELD_OUT_SEED + i``, each reset with its own seed - never seen
-  in training or selection.
+* **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
+  with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
+  (fast: route checks and move judgements are kept); the evaluation callback uses fresh
+  walls of the validation stream (seed ``VALIDATION_SEED``); ``evaluate`` uses fresh
+  held-out walls ``HELD_OUT_SEED + i``, each reset with its own seed - never seen in
+  training or selection.
 * **Tuning**: ``tune`` runs Optuna trials (TPE sampler, median pruner fed by the evaluation
   callback); any number of processes or machines pointing at the same ``--storage``
   (``sqlite:///file.db``, ``postgresql://...``, or ``journal:PATH`` for a journal file on a
@@ -141,7 +145,14 @@ def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str = ENV_ID) -
 
 
 # ------------------------------------------------------------------ environments
-def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | None, subproc: bool) -> Any:
+_POOL_KEYS = ("wall_pool", "wall_pool_seed")
+
+
+def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | None, subproc: bool,
+              pool_seed: int | None = None) -> Any:
+    """``n_envs`` training envs; with ``pool_seed`` None (evaluation) on fresh walls every
+    reset, whatever ``wall_pool`` the config gives, else with the config's wall pool made
+    from ``pool_seed`` (the run's seed) unless it names its own ``wall_pool_seed``."""
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
@@ -152,7 +163,13 @@ def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | N
         kwargs = {"vec_env_cls": SubprocVecEnv, "vec_env_kwargs": {"start_method": "forkserver"}}
     else:
         kwargs = {"vec_env_cls": DummyVecEnv}
-    return make_vec_env(f"kinegym:{ENV_ID}", n_envs=n_envs, seed=seed, env_kwargs=dict(cfg["env_kwargs"]),
+    env_kwargs = dict(cfg["env_kwargs"])
+    if pool_seed is None:
+        for key in _POOL_KEYS:
+            env_kwargs.pop(key, None)
+    elif env_kwargs.get("wall_pool"):
+        env_kwargs.setdefault("wall_pool_seed", int(pool_seed))
+    return make_vec_env(f"kinegym:{ENV_ID}", n_envs=n_envs, seed=seed, env_kwargs=env_kwargs,
                         monitor_dir=str(monitor_dir) if monitor_dir else None,
                         monitor_kwargs={"info_keywords": ("is_success",)}, **kwargs)
 
@@ -173,6 +190,25 @@ def _new_run_dir(base: Path, stem: str) -> Path:
             d.mkdir(parents=True)
             return d
     raise RuntimeError(f"no free run directory under {base}")
+
+
+def _time_limit(minutes: float | None) -> list[Any]:
+    """A callback that ends training cleanly (final model saved) after ``minutes`` of wall
+    time; none for None."""
+    if minutes is None:
+        return []
+    if not minutes > 0:
+        raise ValueError(f"minutes={minutes!r}; expected > 0 (or None for no time limit)")
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class TimeLimit(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.deadline = time.monotonic() + 60.0 * float(minutes)
+
+        def _on_step(self) -> bool:
+            return time.monotonic() < self.deadline
+
+    return [TimeLimit()]
 
 
 def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, extra: Sequence[Any] = ()) -> list[Any]:
@@ -203,10 +239,12 @@ def _set_threads(n: int) -> None:
 
 def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, seed: int = 0, n_envs: int | None = None,
           out: str | Path = "runs", progress: bool = True, overrides: dict[str, Any] | None = None,
-          trial_callback: Any = None, command: Sequence[str] | None = None) -> Path:
-    """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring)."""
+          trial_callback: Any = None, command: Sequence[str] | None = None, minutes: float | None = None) -> Path:
+    """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring).
+    ``minutes`` stops training after that much wall time (the final model is saved)."""
     from sb3_contrib import MaskablePPO
 
+    limit = _time_limit(minutes)  # (checks minutes before anything is made)
     cfg = load_train_config(config)
     cfg.update(overrides or {})
     if timesteps is not None:
@@ -221,7 +259,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     run = _new_run_dir(Path(out), f"gait-seed{seed}")
     (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
     (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
-    env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True)
+    env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True, pool_seed=seed)
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -229,7 +267,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     try:
         model = MaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"), device="cpu",
                             **_model_kwargs(cfg))
-        cbs = _callbacks(cfg, run, cfg["n_envs"], [trial_callback] if trial_callback else [])
+        cbs = _callbacks(cfg, run, cfg["n_envs"], [trial_callback] if trial_callback else []) + limit
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
         model.save(run / "final_model.zip")
         if cfg["normalize"]:
@@ -254,12 +292,13 @@ def _last_checkpoint(run: Path) -> tuple[Path, int]:
 
 
 def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = True,
-           command: Sequence[str] | None = None) -> Path:
+           command: Sequence[str] | None = None, minutes: float | None = None) -> Path:
     """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
     statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
     (default: the run's ``n_timesteps``)."""
     from sb3_contrib import MaskablePPO
 
+    limit = _time_limit(minutes)
     src = Path(run_dir)
     if not (src / "config.yaml").is_file():
         raise FileNotFoundError(f"--resume {src}: not a run directory (no config.yaml)")
@@ -279,7 +318,7 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
     (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed, "resumed_from": str(ck),
                                                      "resumed_steps": steps}, sort_keys=False))
     (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
-    env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True)
+    env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True, pool_seed=seed)
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -289,7 +328,7 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
         env = VecNormalize.load(str(stats), env)
     try:
         model = MaskablePPO.load(ck, env=env, device="cpu", tensorboard_log=str(run / "tb"))
-        cbs = _callbacks(cfg, run, cfg["n_envs"])
+        cbs = _callbacks(cfg, run, cfg["n_envs"]) + limit
         model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
                     reset_num_timesteps=False, tb_log_name="run")
         model.save(run / "final_model.zip")
@@ -364,15 +403,17 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
 # ------------------------------------------------------------------ evaluation
 def policy_env_kwargs(policy: str | Path) -> dict[str, Any]:
     """The ``env_kwargs`` a saved policy was trained with (from its run's ``config.yaml``, next
-    to the model or one folder up - ``best/`` and ``checkpoints/``), without ``mode``; ``{}``
-    for a model outside a run directory."""
+    to the model or one folder up - ``best/`` and ``checkpoints/``), without ``mode`` and the
+    training wall pool (policies are judged on fresh walls); ``{}`` for a model outside a
+    run directory."""
     p = Path(policy)
     for d in (p.parent, p.parent.parent):
         f = d / "config.yaml"
         if f.is_file():
             saved = yaml.safe_load(f.read_text())
             kw = dict((saved.get(ENV_ID) or {}).get("env_kwargs") or {})
-            kw.pop("mode", None)
+            for key in ("mode", *_POOL_KEYS):
+                kw.pop(key, None)
             return kw
     return {}
 

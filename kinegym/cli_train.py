@@ -18,17 +18,20 @@ def cmd_train(args: argparse.Namespace) -> int:
     from agents import train as T
 
     progress = not args.json and not args.no_progress
+    if args.minutes is not None and not args.minutes > 0:
+        raise UsageError(f"--minutes {args.minutes}; expected > 0")
     if args.resume:
         if not Path(args.resume).is_dir():
             raise UsageError(f"--resume {args.resume!r} is not a run directory")
-        run = T.resume(args.resume, args.timesteps, progress=progress, command=["kinegym", *sys.argv[1:]])
+        run = T.resume(args.resume, args.timesteps, progress=progress, command=["kinegym", *sys.argv[1:]],
+                       minutes=args.minutes)
     else:
         if args.timesteps is not None and args.timesteps < 1:
             raise UsageError(f"--timesteps {args.timesteps}; expected >= 1")
         if args.n_envs is not None and not 1 <= args.n_envs <= 64:
             raise UsageError(f"--n-envs {args.n_envs}; expected 1..64")
         run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=progress,
-                      command=["kinegym", *sys.argv[1:]])
+                      command=["kinegym", *sys.argv[1:]], minutes=args.minutes)
     files = sorted(str(p.relative_to(run)) for p in run.rglob("*") if p.is_file() and "tb" not in p.parts)
     lines = [f"run directory: {run}"] + [f"  {f}" for f in files if not f.startswith("monitor/")]
     curve = run / "learning_curve.png"
@@ -88,6 +91,8 @@ def add_parsers(sub: Any, common: Any) -> None:
     tr.add_argument("--n-envs", type=int, default=None, help="parallel envs (SubprocVecEnv when > 1)")
     tr.add_argument("--out", default="runs", help="folder for run directories")
     tr.add_argument("--resume", default=None, help="continue this run directory's last checkpoint")
+    tr.add_argument("--minutes", type=float, default=None,
+                    help="stop after this much wall time (final model saved; default: no limit)")
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
     common(tr)
     tr.set_defaults(func=cmd_train)

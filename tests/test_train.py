@@ -98,3 +98,19 @@ def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:
     assert len(study.trials) == 2
     assert all(t.state in (optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED) for t in study.trials)
     assert len({t.params["learning_rate"] for t in study.trials}) == 2
+
+
+def test_minutes_ends_training_cleanly_and_the_pool_stays_out_of_evaluation(tmp_path: Path) -> None:
+    from sb3_contrib import MaskablePPO
+
+    cfg = small_config(tmp_path, n_envs=1, eval_freq=10**9, checkpoint_freq=10**9,
+                       env_kwargs={"mode": "kinematic", "memory": True, "hints": True, "wall_pool": 5})
+    run = T.train(cfg, timesteps=10**7, seed=3, out=tmp_path / "runs", progress=False, command=["test"],
+                  minutes=0.05)
+    steps = MaskablePPO.load(run / "final_model.zip", device="cpu").num_timesteps
+    assert 0 < steps < 10**7  # stopped by the clock after about 3 s, the final model saved
+    saved = yaml.safe_load((run / "config.yaml").read_text())[T.ENV_ID]["env_kwargs"]
+    assert saved["wall_pool"] == 5
+    assert T.policy_env_kwargs(run / "final_model.zip") == {"memory": True, "hints": True}  # fresh walls
+    with pytest.raises(ValueError, match="minutes=0"):
+        T.train(cfg, minutes=0, out=tmp_path / "runs", progress=False)
