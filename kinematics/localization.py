@@ -873,28 +873,25 @@ class Localizer:
         ``u . (dh_i - dh_j)``; two sides sharing a hand are correlated through it). That gives
         a vectorised screen over every indexed triple before any fit.
         """
+        o0, o1, o2 = order
         sides, us = [], []
-        for k in range(3):
-            i, j = order[k], order[(k + 1) % 3]
+        for i, j in ((o0, o1), (o1, o2), (o2, o0)):
             dx, dy = hx[i] - hx[j], hy[i] - hy[j]
             d = math.hypot(dx, dy)
             sides.append(d)
             us.append((dx / d, dy / d) if d > 0 else (1.0, 0.0))
         if self.noise.tolerance is not None:
             return sides, [self.noise.tolerance] * 3, None
-        ends = [((order[k], 1.0), (order[(k + 1) % 3], -1.0)) for k in range(3)]
-        S = [[0.0] * 3 for _ in range(3)]
-        for k in range(3):
-            ukx, uky = us[k]
-            for m in range(k, 3):
-                umx, umy = us[m]
-                v = 0.0
-                for hk, sk in ends[k]:
-                    for hm, sm in ends[m]:
-                        if hk == hm:
-                            a, b, c = cov[hk]
-                            v += sk * sm * (ukx * (a * umx + b * umy) + uky * (b * umx + c * umy))
-                S[k][m] = S[m][k] = v
+
+        def q(c: tuple[float, float, float], u: tuple[float, float], v: tuple[float, float]) -> float:
+            return u[0] * (c[0] * v[0] + c[1] * v[1]) + u[1] * (c[1] * v[0] + c[2] * v[1])
+
+        (u0, u1, u2), (c0, c1, c2) = us, (cov[o0], cov[o1], cov[o2])
+        # side k runs from hand o_k to o_(k+1); two sides share one hand, with opposite signs
+        s01, s12, s02 = -q(c1, u0, u1), -q(c2, u1, u2), -q(c0, u0, u2)
+        S = [[q(c0, u0, u0) + q(c1, u0, u0), s01, s02],
+             [s01, q(c1, u1, u1) + q(c2, u1, u1), s12],
+             [s02, s12, q(c2, u2, u2) + q(c0, u2, u2)]]
         return sides, S, _inv3(S)
 
     def _screen(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
@@ -1142,10 +1139,16 @@ class Localizer:
         if moved_arm is not None and moved_arm not in (1, 2, 3):
             raise InvalidInputError(f"moved_arm={moved_arm!r}; expected 1, 2, 3 or None")
         hx, hy, cov, w = self._measure(q)
-        what = "tracking" if moved_arm is None else f"tracking arm {moved_arm}"
         xs, ys = self._xs, self._ys
+        verts = self._track_verts(holes, hx, hy, cov, moved_arm)
+        if len(verts) == 1 and self.noise.tolerance is None:  # the usual case: one hole near the prediction
+            v = verts[0]
+            x, y, th, chi2, res = _fit_one((xs[v[0]], xs[v[1]], xs[v[2]]), (ys[v[0]], ys[v[1]], ys[v[2]]), hx, hy, w)
+            if chi2 <= self._limit:
+                return Fix(self._candidate(v, x, y, th, chi2, res), None, 1, (hx, hy), cov)
+        what = "tracking" if moved_arm is None else f"tracking arm {moved_arm}"
         fits = []
-        for v in self._track_verts(holes, hx, hy, cov, moved_arm):
+        for v in verts:
             x, y, th, chi2, res = _fit_one((xs[v[0]], xs[v[1]], xs[v[2]]), (ys[v[0]], ys[v[1]], ys[v[2]]), hx, hy, w)
             fits.append((chi2, v, x, y, th, res))
         fits.sort(key=lambda f: f[0])
