@@ -91,7 +91,7 @@ climb it with this gait).
 ``wall_pool=N`` (training): instead of a new wall every reset, each reset draws one of ``N``
 tasks (wall, start, goal), task ``i`` made once from the seed ``(wall_pool_seed, i)``; a task
 keeps its route check and its move judgements between episodes, which makes resets free and
-steps several times faster. Evaluate on fresh walls (``wall_pool=0``).
+steps about twice as fast. Evaluate on fresh walls (``wall_pool=0``).
 """
 
 from __future__ import annotations

@@ -37,7 +37,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     curve = run / "learning_curve.png"
     if curve.is_file():
         lines.append(f"learning curve: {curve}")
-    lines.append(f"evaluate it: kinegym evaluate gait --policy {run / 'best' / 'best_model.zip'}")
+    lines.append(f"evaluate it: kinegym evaluate gait --policy {run / 'final_model.zip'}"
+                 f"  (the best on validation walls: {run / 'best' / 'best_model.zip'})")
     _emit(args, {"run": str(run), "files": files}, "\n".join(lines))
     return EXIT_OK
 
