@@ -1140,18 +1140,12 @@ class Localizer:
             raise InvalidInputError(f"moved_arm={moved_arm!r}; expected 1, 2, 3 or None")
         hx, hy, cov, w = self._measure(q)
         xs, ys = self._xs, self._ys
-        verts = self._track_verts(holes, hx, hy, cov, moved_arm)
-        if len(verts) == 1 and self.noise.tolerance is None:  # the usual case: one hole near the prediction
-            v = verts[0]
-            x, y, th, chi2, res = _fit_one((xs[v[0]], xs[v[1]], xs[v[2]]), (ys[v[0]], ys[v[1]], ys[v[2]]), hx, hy, w)
-            if chi2 <= self._limit:
-                return Fix(self._candidate(v, x, y, th, chi2, res), None, 1, (hx, hy), cov)
-        what = "tracking" if moved_arm is None else f"tracking arm {moved_arm}"
         fits = []
-        for v in verts:
+        for v in self._track_verts(holes, hx, hy, cov, moved_arm):
             x, y, th, chi2, res = _fit_one((xs[v[0]], xs[v[1]], xs[v[2]]), (ys[v[0]], ys[v[1]], ys[v[2]]), hx, hy, w)
             fits.append((chi2, v, x, y, th, res))
-        fits.sort(key=lambda f: f[0])
+        if len(fits) > 1:  # usually one hole lies near the prediction: nothing to order
+            fits.sort(key=lambda f: f[0])
         if self.noise.tolerance is None:  # the common case without building every candidate
             passed = [f for f in fits if f[0] <= self._limit]
             if len(passed) == 1:
@@ -1159,6 +1153,7 @@ class Localizer:
                 runner = next((f for f in fits if f is not best), None)
                 lazy = None if runner is None else (lambda r=runner: self._from_fit(r))
                 return Fix(self._from_fit(best), lazy, len(fits), (hx, hy), cov)
+        what = "tracking" if moved_arm is None else f"tracking arm {moved_arm}"
         return self._decide([self._from_fit(f) for f in fits], hx, hy, cov, what)
 
     def _from_fit(self, f: tuple) -> Candidate:
