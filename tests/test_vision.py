@@ -97,6 +97,8 @@ def test_bad_input_is_a_named_error() -> None:
         BoardReader().read(np.zeros((10, 10, 3), np.uint8))
     with pytest.raises(VisionError, match="size=4"):
         BoardReader(size=4)
+    with pytest.raises(VisionError, match="cell_px=5"):
+        BoardReader(cell_px=5)
 
 
 def test_debug_image_shows_the_grid_or_the_reason() -> None:

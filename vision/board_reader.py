@@ -136,8 +136,9 @@ def ink_map(image: object, stroke_px: float = 12.0) -> np.ndarray:
     # otherwise look like a stroke (8-bit morphology: several times faster than float)
     padded = cv2.copyMakeBorder(y8, k, k, k, k, cv2.BORDER_REPLICATE)
     bg = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)))[k:-k, k:-k]
-    d = 1.0 - y8.astype(np.float32) / np.maximum(bg, 8).astype(np.float32)
-    return np.clip(d, 0.0, 1.0, out=d)
+    # a closing never darkens, so 0 <= y8 <= bg and the darkness lies in 0..1 as it is
+    d = np.divide(y8, np.maximum(bg, 8), dtype=np.float32)
+    return np.subtract(1.0, d, out=d, dtype=np.float32)
 
 
 # ------------------------------------------------------------------ lines
@@ -168,17 +169,24 @@ def _segments(mask: np.ndarray, min_len: float) -> np.ndarray:
     return np.zeros((0, 4)) if segs is None else segs.reshape(-1, 4).astype(np.float64)
 
 
-def _fit_points(pts: np.ndarray, wts: np.ndarray, length: float) -> _Line:
-    """Total-least-squares line through weighted points, spanning their extent."""
-    c = (pts * wts[:, None]).sum(0) / wts.sum()
-    cov = ((pts - c) * wts[:, None]).T @ (pts - c)
-    _, evecs = np.linalg.eigh(cov)
-    nrm = evecs[:, 0]
-    th = math.atan2(nrm[1], nrm[0]) % np.pi
-    nrm = np.array([math.cos(th), math.sin(th)])
-    dirv = np.array([-nrm[1], nrm[0]])
-    t = (pts - c) @ dirv
-    return _Line(th, float(c @ nrm), length, c + t.min() * dirv, c + t.max() * dirv)
+def _fit_lines(pts: np.ndarray, wts: np.ndarray, lengths: Sequence[float]) -> list[_Line]:
+    """Total-least-squares lines through weighted points, one per row of ``pts`` ``(L, N, 2)``
+    (weights ``(L, N)``; 0 pads a row), each spanning its points' extent: the principal axis
+    of the 2 x 2 weighted scatter, in closed form."""
+    c = (wts[..., None] * pts).sum(axis=1) / wts.sum(axis=1)[:, None]
+    dx, dy = pts[..., 0] - c[:, None, 0], pts[..., 1] - c[:, None, 1]
+    wx = wts * dx
+    sxx, sxy, syy = (wx * dx).sum(axis=1), (wx * dy).sum(axis=1), (wts * dy * dy).sum(axis=1)
+    # the normal is the minor axis: a quarter turn from the major one
+    th = np.mod(0.5 * np.arctan2(2.0 * sxy, sxx - syy) + 0.5 * math.pi, math.pi)
+    cs, sn = np.cos(th), np.sin(th)
+    t = dx * -sn[:, None] + dy * cs[:, None]
+    used = wts > 0
+    t0, t1 = np.where(used, t, np.inf).min(axis=1), np.where(used, t, -np.inf).max(axis=1)
+    rho = c[:, 0] * cs + c[:, 1] * sn
+    return [_Line(float(th[i]), float(rho[i]), float(lengths[i]),
+                  np.array([c[i, 0] - t0[i] * sn[i], c[i, 1] + t0[i] * cs[i]]),
+                  np.array([c[i, 0] - t1[i] * sn[i], c[i, 1] + t1[i] * cs[i]])) for i in range(len(th))]
 
 
 def _merge(segs: np.ndarray, tol: float) -> list[_Line]:
@@ -189,28 +197,55 @@ def _merge(segs: np.ndarray, tol: float) -> list[_Line]:
         return []
     d = segs[:, 2:] - segs[:, :2]
     length = np.hypot(d[:, 0], d[:, 1])
-    # each group is founded by its longest segment, whose line decides membership
-    founders: list[tuple[np.ndarray, float]] = []
-    members: list[list[int]] = []
-    for i in np.argsort(-length):
+    # each group is founded by the longest segment left, whose line decides membership
+    # (taken in turn, a segment joins the first group whose founder's line it fits)
+    members: list[np.ndarray] = []
+    free = np.ones(len(segs), bool)
+    order = np.argsort(-length)
+    while free.any():
+        i = order[free[order]][0]
         a, b = segs[i, :2], segs[i, 2:]
-        for g, (nrm, rho) in enumerate(founders):
-            if abs(a @ nrm - rho) <= tol and abs(b @ nrm - rho) <= tol:
-                members[g].append(int(i))
-                break
-        else:
-            nrm = np.array([-(b - a)[1], (b - a)[0]]) / max(float(length[i]), 1e-9)
-            founders.append((nrm, float(a @ nrm)))
-            members.append([int(i)])
+        nrm = np.array([a[1] - b[1], b[0] - a[0]]) / max(float(length[i]), 1e-9)
+        rho = float(a @ nrm)
+        fits = free & (np.abs(segs[:, :2] @ nrm - rho) <= tol) & (np.abs(segs[:, 2:] @ nrm - rho) <= tol)
+        fits[i] = True
+        ix = order[fits[order]]  # longest first, as the segments would have joined
+        members.append(ix)
+        free[ix] = False
+    # every group's line through its segments' ends, weighted by the segments' lengths
+    most = max(len(ix) for ix in members)
+    pts = np.zeros((len(members), 2 * most, 2))
+    wts = np.zeros((len(members), 2 * most))
+    for g, ix in enumerate(members):
+        k = len(ix)
+        pts[g, :k], pts[g, most:most + k] = segs[ix, :2], segs[ix, 2:]
+        wts[g, :k] = wts[g, most:most + k] = length[ix]
     out = []
-    for idx in members:
-        ix = np.array(idx)
-        ln = _fit_points(np.concatenate([segs[ix, :2], segs[ix, 2:]]), np.tile(length[ix], 2), 0.0)
+    for ix, ln in zip(members, _fit_lines(pts, wts, [0.0] * len(members))):
         # length: the union of the pieces along the line, not their sum
         ta, tb = (segs[ix, :2] - ln.p0) @ ln.direction, (segs[ix, 2:] - ln.p0) @ ln.direction
         iv = list(zip(np.minimum(ta, tb).tolist(), np.maximum(ta, tb).tolist()))
         out.append(_Line(ln.theta, ln.rho, _union_length(iv), ln.p0, ln.p1))
     return out
+
+
+def _median(values: np.ndarray) -> float:
+    """``np.median`` of a small 1-D array, without its overhead (it runs many times a frame)."""
+    v = np.sort(values)
+    k = len(v) // 2
+    return float(v[k] if len(v) % 2 else (v[k - 1] + v[k]) / 2)
+
+
+def _percentile(values: np.ndarray, q: float) -> float:
+    """``np.percentile(values, q)`` (linear interpolation) by a partial sort: several times
+    faster on an image."""
+    pos = q / 100.0 * (len(values) - 1)
+    k = int(math.floor(pos))
+    if k + 1 >= len(values):
+        return float(np.max(values))
+    part = np.partition(values, (k, k + 1))
+    a, b, g = float(part[k]), float(part[k + 1]), pos - k
+    return a + (b - a) * g if g < 0.5 else b - (b - a) * (1.0 - g)
 
 
 def _union_length(intervals: Sequence[tuple[float, float]]) -> float:
@@ -233,48 +268,65 @@ def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
     return np.array([(a.rho * sb - b.rho * sa) / det, (ca * b.rho - cb * a.rho) / det])
 
 
-def _refit(ln: _Line, ink: np.ndarray, floor: float, band: float) -> _Line | None:
-    """The line refitted to the full-resolution ink map around it: every 3 px along the line
+def _refit(lines: list[_Line], ink: np.ndarray, floor: float, band: float) -> list[_Line | None]:
+    """Each line refitted to the full-resolution ink map around it: every 3 px along the line
     (and a little past its ends), the darkness-weighted centre of the ink within ``band`` px
-    across it, then a weighted total-least-squares line through those centres. None if no
-    ink is there."""
+    across it, then a weighted total-least-squares line through those centres. None for a
+    line with no ink there. (All lines at once: the samples of shorter lines are padded.)"""
+    if not lines:
+        return []
     h, w = ink.shape
-    length = float(np.linalg.norm(ln.p1 - ln.p0))
-    t = np.arange(-band, length + band + 1.0, 3.0)
+    p0 = np.array([ln.p0 for ln in lines])
+    th = np.array([ln.theta for ln in lines])
+    nrm = np.stack([np.cos(th), np.sin(th)], -1)
+    dirv = np.stack([-nrm[:, 1], nrm[:, 0]], -1)
+    length = np.hypot(*(np.array([ln.p1 for ln in lines]) - p0).T)
+    count = np.ceil((length + 2.0 * band + 1.0) / 3.0).astype(np.intp)  # samples along each line
+    t = -band + 3.0 * np.arange(int(count.max()))
     u = np.arange(-math.ceil(band), math.ceil(band) + 1.0)
-    pts = ln.p0[None, None, :] + t[:, None, None] * ln.direction + u[None, :, None] * ln.normal
+    pts = (p0[:, None, None, :] + t[None, :, None, None] * dirv[:, None, None, :]
+           + u[None, None, :, None] * nrm[:, None, None, :])
     x = np.clip(np.rint(pts[..., 0]).astype(np.intp), 0, w - 1)
     y = np.clip(np.rint(pts[..., 1]).astype(np.intp), 0, h - 1)
     wt = np.maximum(ink[y, x] - floor, 0.0)
-    tot = wt.sum(axis=1)
-    on = tot > 0
-    if on.sum() < 5:
-        return None
-    off = (wt[on] * u).sum(axis=1) / tot[on]
-    centres = ln.p0 + t[on, None] * ln.direction + off[:, None] * ln.normal
-    return _fit_points(centres, tot[on], ln.length)
+    tot = wt.sum(axis=2)
+    on = (tot > 0) & (np.arange(len(t))[None, :] < count[:, None])
+    off = (wt * u).sum(axis=2) / np.where(on, tot, 1.0)
+    centres = p0[:, None, :] + t[None, :, None] * dirv[:, None, :] + off[..., None] * nrm[:, None, :]
+    good = np.flatnonzero(on.sum(axis=1) >= 5)
+    out: list[_Line | None] = [None] * len(lines)
+    fits = _fit_lines(centres[good], np.where(on[good], tot[good], 0.0), [lines[i].length for i in good])
+    for i, fit in zip(good, fits):
+        out[i] = fit
+    return out
+
+
+def _line_arrays(lines: list[_Line]) -> tuple[np.ndarray, ...]:
+    """cos, sin of the normals, rho, start points ``(L, 2)`` and drawn lengths of lines."""
+    th = np.array([ln.theta for ln in lines])
+    p0 = np.array([ln.p0 for ln in lines])
+    p1 = np.array([ln.p1 for ln in lines])
+    return np.cos(th), np.sin(th), np.array([ln.rho for ln in lines]), p0, np.hypot(*(p1 - p0).T)
 
 
 def _crossing(fam: list[_Line], other: list[_Line], slack: float) -> list[_Line]:
     """The lines of ``fam`` that cross at least two lines of ``other``, and at least half
     of them, within both lines' drawn extents (``slack`` px beyond the ends allowed): a
     paper edge, a shadow's edge or a row of symbol strokes crosses few of the field's lines."""
-    if len(other) < 2:
+    if len(other) < 2 or not fam:
         return fam
-    out = []
-    for a in fam:
-        hits = 0
-        la = float(np.linalg.norm(a.p1 - a.p0))
-        for b in other:
-            p = _intersect(a, b)
-            if p is None:
-                continue
-            ta, tb = (p - a.p0) @ a.direction, (p - b.p0) @ b.direction
-            lb = float(np.linalg.norm(b.p1 - b.p0))
-            hits += -slack <= ta <= la + slack and -slack <= tb <= lb + slack
-        if hits >= max(2, (len(other) + 1) // 2):
-            out.append(a)
-    return out
+    ca, sa, ra, pa, la = (v[:, None] for v in _line_arrays(fam))
+    cb, sb, rb, pb, lb = (v[None, :] for v in _line_arrays(other))
+    det = ca * sb - sa * cb
+    ok = np.abs(det) >= 1e-9
+    det = np.where(ok, det, 1.0)
+    x, y = (ra * sb - rb * sa) / det, (ca * rb - cb * ra) / det  # the crossings (A, B)
+    # positions along each line (direction: the normal turned a quarter)
+    ta = (x - pa[..., 0]) * -sa + (y - pa[..., 1]) * ca
+    tb = (x - pb[..., 0]) * -sb + (y - pb[..., 1]) * cb
+    hit = ok & (ta >= -slack) & (ta <= la + slack) & (tb >= -slack) & (tb <= lb + slack)
+    need = max(2, (len(other) + 1) // 2)
+    return [a for a, h in zip(fam, hit.sum(axis=1)) if h >= need]
 
 
 def _families(lines: list[_Line]) -> tuple[list[_Line], list[_Line]]:
@@ -336,22 +388,30 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
     peaks = cv2.blur(rect[o:o + n * s, o:o + n * s], (3, 3)).reshape(n, s, n, s).max(axis=(1, 3))
     out = np.zeros((n, n, 7))
     out[..., 0], out[..., 5] = peaks, 1.0
-    idx = np.clip((np.arange(side) - o) // s, 0, n - 1)
-    thr = np.maximum(threshold, 0.5 * peaks)[idx[:, None], idx[None, :]]
+    # each cell's threshold over its own square; the margin goes with the outer cells
+    reps = np.full(n, s)
+    reps[0], reps[-1] = s + o, side - o - (n - 1) * s
+    thr = np.repeat(np.repeat(np.maximum(threshold, 0.5 * peaks), reps, axis=0), reps, axis=1)
     m = (rect > thr).astype(np.uint8)
-    n_lab, lab, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8)
-    col, row = np.floor((cents[:, 0] - o + 0.5) / s).astype(int), np.floor((cents[:, 1] - o + 0.5) / s).astype(int)
+    n_lab, lab = cv2.connectedComponents(m, connectivity=8)  # (its statistics cost 4x the labels)
+    flat = np.flatnonzero(lab)
+    comp = lab.ravel()[flat]
+    yi, xi = np.divmod(flat, side)
+    area = np.bincount(comp, minlength=n_lab)
+    a1 = np.maximum(area, 1)
+    cx, cy = np.bincount(comp, xi, n_lab) / a1, np.bincount(comp, yi, n_lab) / a1
+    col, row = np.floor((cx - o + 0.5) / s).astype(int), np.floor((cy - o + 0.5) / s).astype(int)
     comp_cell = np.where((col >= 0) & (col < n) & (row >= 0) & (row < n), row * n + col, -1)
-    comp_cell[stats[:, cv2.CC_STAT_AREA] < max(4, int(0.015 * s * s))] = -1
+    comp_cell[area < max(4, int(0.015 * s * s))] = -1
     comp_cell[0] = -1
     ok_cell = peaks.ravel() >= min_peak
     comp_cell[(comp_cell >= 0) & ~ok_cell[np.maximum(comp_cell, 0)]] = -1
-    ys, xs = np.nonzero(lab)
-    cell = comp_cell[lab[ys, xs]]
+    cell = comp_cell[comp]
     keep = cell >= 0
     if not keep.any():
         return out
-    ys, xs, cell = ys[keep].astype(np.float64), xs[keep].astype(np.float64), cell[keep]
+    flat = flat[keep]
+    ys, xs, cell = yi[keep].astype(np.float64), xi[keep].astype(np.float64), cell[keep]
     cnt = np.bincount(cell, minlength=cells).astype(np.float64)
     has = cnt > 0
     c1 = np.maximum(cnt, 1.0)
@@ -380,16 +440,18 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
     bw, bh = np.where(has, x1 - x0 + 1, 0), np.where(has, y1 - y0 + 1, 0)
     # enclosed background: flood the outside of the (gap-closed) marks from the border
     marks = np.zeros_like(m)
-    marks[ys.astype(int), xs.astype(int)] = 1
+    marks.ravel()[flat] = 1
     ck = max(3, int(round(0.08 * s)) | 1)
     closed = cv2.morphologyEx(marks, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (ck, ck)))
-    flood = cv2.copyMakeBorder(closed, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
-    cv2.floodFill(flood, None, (0, 0), 2)
-    n_h, _, st_h, c_h = cv2.connectedComponentsWithStats((flood[1:-1, 1:-1] == 0).astype(np.uint8), connectivity=4)
+    # enclosed: the background's 4-connected pieces that do not reach the map's edge
+    _, _, st_h, c_h = cv2.connectedComponentsWithStats((closed == 0).astype(np.uint8), connectivity=4)
+    left, top = st_h[1:, cv2.CC_STAT_LEFT], st_h[1:, cv2.CC_STAT_TOP]
+    enclosed = ((left > 0) & (top > 0) & (left + st_h[1:, cv2.CC_STAT_WIDTH] < side)
+                & (top + st_h[1:, cv2.CC_STAT_HEIGHT] < side))
     hole = np.zeros(cells)
-    if n_h > 1:
+    if enclosed.any():
         hc, hr = np.floor((c_h[1:, 0] - o + 0.5) / s).astype(int), np.floor((c_h[1:, 1] - o + 0.5) / s).astype(int)
-        inside = (hc >= 0) & (hc < n) & (hr >= 0) & (hr < n)
+        inside = enclosed & (hc >= 0) & (hc < n) & (hr >= 0) & (hr < n)
         np.maximum.at(hole, (hr * n + hc)[inside], st_h[1:, cv2.CC_STAT_AREA][inside].astype(np.float64))
         hole = hole / np.maximum(bw * bh, 1.0)
     f = out.reshape(cells, 7)
@@ -440,6 +502,10 @@ class BoardReader:
                  grid_px: int = 400) -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
+        if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
+            raise VisionError(f"cell_px={cell_px!r}; expected 12..200 pixels per rectified cell")
+        if min(int(max_side_px), int(grid_px)) < 64:
+            raise VisionError(f"max_side_px={max_side_px!r}, grid_px={grid_px!r}; expected at least 64 pixels each")
         self.size = size
         self.cell_px = int(cell_px)
         self.max_side_px = int(max_side_px)
@@ -485,7 +551,7 @@ class BoardReader:
         and size. Ink is "dark" above a share of the image's darkest strokes; if no grid
         shows at that share, a lower one is tried (a light, thin field next to bold marks)."""
         trace = {} if trace is None else trace
-        top = float(np.percentile(d[::2, ::2], 99.5))
+        top = _percentile(d[::2, ::2].ravel(), 99.5)
         try:
             return self._find_grid_at(d, diag, max(0.18, 0.35 * top), trace)
         except NoBoardError as first:
@@ -510,7 +576,7 @@ class BoardReader:
         tol = 0.006 * diag + 2
         merged = _merge(segs, tol)
         shortest = 0.25 * max((ln.length for ln in merged), default=0.0)  # symbol strokes: not worth a refit
-        refit = [_refit(ln, d, t0, tol) for ln in merged if ln.length >= shortest]
+        refit = _refit([ln for ln in merged if ln.length >= shortest], d, t0, tol)
         lines = [ln for ln in refit if ln is not None]
         trace["lines"] = lines
         if len(lines) < 4:
@@ -603,10 +669,10 @@ class BoardReader:
         fam, pos = [fam[i] for i in order], [pos[i] for i in order]
         longest = max(ln.length for ln in fam)
         long_pos = [p for ln, p in zip(fam, pos) if ln.length >= 0.45 * longest]
-        typical = float(np.median(np.diff(long_pos))) if len(long_pos) > 1 else longest
+        typical = _median(np.diff(long_pos)) if len(long_pos) > 1 else longest
         gaps = np.diff(long_pos)
         if len(gaps) > 1 and (gaps > 0.35 * typical).sum() >= 1:  # double detections shrink the median
-            typical = float(np.median(gaps[gaps > 0.35 * typical]))
+            typical = _median(gaps[gaps > 0.35 * typical])
         groups: list[list[_Line]] = []
         last = -math.inf
         for ln, p in zip(fam, pos):
@@ -627,7 +693,7 @@ class BoardReader:
             t0, t1 = min(a for a, _ in iv), max(b for _, b in iv)
             span = _Line(base.theta, base.rho, float(cover), base.p0 + t0 * base.direction,
                          base.p0 + t1 * base.direction)
-            fit = _refit(span, d, floor, 2 * tol)
+            fit = _refit([span], d, floor, 2 * tol)[0]
             merged.append(_Line(fit.theta, fit.rho, float(cover), fit.p0, fit.p1) if fit else span)
         best = max(ln.length for ln in merged)
         return [ln for ln in merged if ln.length >= 0.45 * best]
@@ -656,7 +722,7 @@ class BoardReader:
         rest = [(a, b) for a in range(len(cols) - 1) for b in range(len(rows) - 1) if (a, b) not in middle]
         seen: list[np.ndarray] = []
         for group in (middle, rest):
-            scored_all = []
+            H0s = []
             for a, b in group:
                 quad = [_intersect(cols[a], rows[b]), _intersect(cols[a + 1], rows[b]),
                         _intersect(cols[a + 1], rows[b + 1]), _intersect(cols[a], rows[b + 1])]
@@ -664,19 +730,21 @@ class BoardReader:
                     continue
                 try:
                     H0 = cv2.getPerspectiveTransform(unit, np.array(quad, np.float32)).astype(np.float64)
-                    Hinv = np.linalg.inv(H0)
-                except (cv2.error, np.linalg.LinAlgError):
+                except cv2.error:
                     continue
-                scored = self._score_lattice(Hinv, P)
-                if scored is not None:
-                    scored_all.append((scored[0], H0))
-            scored_all.sort(key=lambda t: -t[0])
-            for _, H0 in scored_all:
-                fit = self._refine_lattice(H0, P)
+                if abs(np.linalg.det(H0)) > 1e-12:
+                    H0s.append(H0)
+            if not H0s:
+                continue
+            scores = self._score_lattices(np.linalg.inv(np.array(H0s)), P)
+            for k in np.argsort(-scores, kind="stable"):
+                if not np.isfinite(scores[k]):
+                    break
+                fit = self._refine_lattice(H0s[k], P)
                 if fit is None:
                     continue
                 key = np.rint(_apply(fit[0], np.array([[0.0, 0.0], [1.0, 1.0]]))).ravel()
-                if any(np.abs(key - k).max() < 3 for k in seen):  # the same lattice again
+                if any(np.abs(key - prev).max() < 3 for prev in seen):  # the same lattice again
                     continue
                 seen.append(key)
                 yield fit
@@ -704,21 +772,29 @@ class BoardReader:
         return H, nodes, float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
 
     @staticmethod
-    def _score_lattice(Hinv: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarray] | None:
-        L = _apply(Hinv, P)
-        if not np.all(np.isfinite(L)):
-            return None
+    def _score_lattices(Hinv: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """Scores of lattice hypotheses ``Hinv`` ``(G, 3, 3)`` (px -> cells) against the line
+        crossings ``P``: the distinct lattice points that crossings fall on (within 0.2 of a
+        cell) less half the unsupported points of the box they span; -inf for a hypothesis
+        with fewer than 4 such crossings, a box over 9 lattice lines, or points at infinity."""
+        Lh = np.concatenate([P, np.ones((len(P), 1))], axis=1) @ Hinv.transpose(0, 2, 1)  # (G, N, 3)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            L = Lh[..., :2] / Lh[..., 2:3]
+        finite = np.isfinite(L).all(axis=(1, 2))
+        L = np.where(finite[:, None, None], L, 0.0)
         R = np.rint(L)
-        inl = np.all(np.abs(L - R) < 0.2, axis=1)
-        if inl.sum() < 4:
-            return None
-        ij = R[inl].astype(np.int64)
-        lo, hi = ij.min(axis=0), ij.max(axis=0)
-        if np.any(hi - lo > 8):
-            return None
-        distinct = len(set(((ij[:, 0] - lo[0]) * 16 + ij[:, 1] - lo[1]).tolist()))
-        box = int(np.prod(hi - lo + 1))
-        return distinct - 0.5 * (box - distinct), inl
+        inl = np.all(np.abs(L - R) < 0.2, axis=2)
+        big = np.iinfo(np.int64).max // 4
+        ij = R.astype(np.int64)
+        lo = np.where(inl[..., None], ij, big).min(axis=1)
+        hi = np.where(inl[..., None], ij, -big).max(axis=1)
+        ok = finite & (inl.sum(axis=1) >= 4)
+        ok &= np.where(ok[:, None], hi - lo, 0).max(axis=1) <= 8
+        rel = np.where(ok[:, None, None], ij - lo[:, None, :], 0)
+        codes = np.sort(np.where(inl, rel[..., 0] * 16 + rel[..., 1], big), axis=1)
+        distinct = ((codes[:, 1:] != codes[:, :-1]) & (codes[:, 1:] != big)).sum(axis=1) + (codes[:, 0] != big)
+        box = np.where(ok[:, None], hi - lo + 1, 0).prod(axis=1)
+        return np.where(ok, distinct - 0.5 * (box - distinct), -np.inf)
 
     def _border_steps(self, ext: list[float], span_c: int, span_r: int) -> tuple[list[int], int]:
         """Cells from the outermost lines to the border, per side (left, right, top, bottom),
@@ -749,47 +825,54 @@ class BoardReader:
         return best[1], best[2]
 
     @staticmethod
-    def _drawn_range(H: np.ndarray, near: np.ndarray, axis: int, lo: int, hi: int, a: int, b: int
+    def _lattice_ink(H: np.ndarray, near: np.ndarray, axis: int, ks: np.ndarray, t: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """Ink (``near``) at lattice points ``(ks, t)`` (axis 0: column lines ``u = ks``,
+        ``v = t``; 1: row lines) and which of them lie in the image: two ``(len(ks), len(t))``
+        bool arrays (no ink outside the image)."""
+        h, w = near.shape
+        u, v = np.broadcast_arrays(ks[:, None], t[None, :])
+        pts = np.stack([u, v] if axis == 0 else [v, u], -1).reshape(-1, 2).astype(np.float64)
+        px = np.rint(_apply(H, pts)).astype(np.intp)
+        inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+        hit = np.zeros(len(px), bool)
+        hit[inside] = near[px[inside, 1], px[inside, 0]] > 0
+        return hit.reshape(u.shape), inside.reshape(u.shape)
+
+    @classmethod
+    def _drawn_range(cls, H: np.ndarray, near: np.ndarray, axis: int, lo: int, hi: int, a: int, b: int
                      ) -> tuple[int, int]:
         """Trim ``lo..hi`` (lattice lines along ``axis``; 0 = columns) to the outermost lines
         that carry ink along at least 60 % of their length between ``a`` and ``b``."""
-        h, w = near.shape
         t = np.linspace(a, b, 12 * max(1, b - a) + 1)
         t = t[np.abs(t - np.rint(t)) > 0.15]  # away from the crossings, which any line has
+        ks = np.arange(int(lo), int(hi) + 1)
+        hit, inside = cls._lattice_ink(H, near, axis, ks, t)
+        seen = inside.sum(axis=1)
+        drawn = (seen > 0) & (hit.sum(axis=1) / np.maximum(seen, 1) >= 0.6)
+        first = np.flatnonzero(drawn[:-1])  # the first drawn line, keeping at least one line
+        lo_i = int(first[0]) if len(first) else len(ks) - 1
+        last = np.flatnonzero(drawn[lo_i + 1:])
+        hi_i = lo_i + 1 + int(last[-1]) if len(last) else lo_i
+        return int(ks[lo_i]), int(ks[hi_i])
 
-        def drawn(k: int) -> bool:
-            pts = np.stack([np.full_like(t, k), t], -1) if axis == 0 else np.stack([t, np.full_like(t, k)], -1)
-            px = np.rint(_apply(H, pts)).astype(int)
-            ok = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
-            return bool(ok.any()) and float((near[px[ok, 1], px[ok, 0]] > 0).mean()) >= 0.6
-
-        while hi - lo >= 1 and not drawn(lo):
-            lo += 1
-        while hi - lo >= 1 and not drawn(hi):
-            hi -= 1
-        return int(lo), int(hi)
-
-    @staticmethod
-    def _extension(H: np.ndarray, near: np.ndarray, axis: int, at: int, outwards: int, lo: int, hi: int) -> float:
+    @classmethod
+    def _extension(cls, H: np.ndarray, near: np.ndarray, axis: int, at: int, outwards: int, lo: int, hi: int
+                   ) -> float:
         """How far (in cells) the lattice lines that cross lattice line ``at`` run on past it
         as ink, going ``outwards`` (-1 or +1): the median over those lines (``lo..hi``) of
         the ink run from the crossing; two misses in a row end a run.
 
         ``axis`` 0: the column line ``u = at``, crossed by the rows; 1: the row line ``v = at``.
         """
-        h, w = near.shape
+        if hi < lo:
+            return 0.0
         t = np.arange(0.1, 2.6, 0.1)
-        runs = []
-        for k in range(int(lo), int(hi) + 1):
-            along = at + outwards * t
-            pts = np.stack([along, np.full_like(t, k)], -1) if axis == 0 else np.stack([np.full_like(t, k), along], -1)
-            px = np.rint(_apply(H, pts)).astype(int)
-            inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
-            hit = np.zeros(len(t), bool)
-            hit[inside] = near[px[inside, 1], px[inside, 0]] > 0
-            miss = np.flatnonzero(~hit[:-1] & ~hit[1:])
-            runs.append(float(t[miss[0]]) - 0.1 if len(miss) else float(t[-1]))
-        return float(np.median(runs)) if runs else 0.0
+        # the crossing lines run along the other axis, at their own index k
+        hit, _ = cls._lattice_ink(H, near, 1 - axis, np.arange(int(lo), int(hi) + 1), at + outwards * t)
+        miss = ~hit[:, :-1] & ~hit[:, 1:]
+        runs = np.where(miss.any(axis=1), t[miss.argmax(axis=1)] - 0.1, t[-1])
+        return _median(runs)
 
     def _line_contrast(self, d: np.ndarray, H: np.ndarray, n: int) -> tuple[float, float]:
         """Median peak darkness along the interior grid lines (the contrast of real ink) and
@@ -804,11 +887,14 @@ class BoardReader:
         ok = (px[:, 0] >= 0) & (px[:, 0] < wid) & (px[:, 1] >= 0) & (px[:, 1] < hgt)
         if not ok.any():
             return 0.5, 0.0
-        dm = cv2.dilate(d, cv2.getStructuringElement(cv2.MORPH_RECT, (5, 5)))
-        vals = dm[px[ok, 1], px[ok, 0]]
+        # the darkest pixel within 2 px of each sample (a 5 x 5 dilation, at the samples only)
+        off = np.arange(-2, 3)
+        ys = np.clip(px[ok, 1, None, None] + off[None, :, None], 0, hgt - 1)
+        xs = np.clip(px[ok, 0, None, None] + off[None, None, :], 0, wid - 1)
+        vals = d[ys, xs].max(axis=(1, 2))
         floor = 0.15
         on = vals[vals > floor]
-        return (float(np.median(on)) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
+        return (_median(on) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
 
     # -- cells -----------------------------------------------------------------------
     def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float) -> tuple[np.ndarray, np.ndarray]:
@@ -824,21 +910,24 @@ class BoardReader:
         return _probabilities(feats, line_ref), feats
 
 
-def _quadratic_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares ``y = a + b x + c x^2`` by the normal equations (no BLAS call: these
-    are tiny and run dozens of times per frame)."""
-    if len(x) < 3:
-        return (float(np.mean(y)) if len(y) else 0.0, 0.0, 0.0)
-    x2 = x * x
-    s0, s1, s2, s3, s4 = float(len(x)), float(x.sum()), float(x2.sum()), float((x2 * x).sum()), float((x2 * x2).sum())
-    t0, t1, t2 = float(y.sum()), float((x * y).sum()), float((x2 * y).sum())
-    det = s0 * (s2 * s4 - s3 * s3) - s1 * (s1 * s4 - s3 * s2) + s2 * (s1 * s3 - s2 * s2)
-    if abs(det) < 1e-12:
-        return (t0 / s0, 0.0, 0.0)
-    a = (t0 * (s2 * s4 - s3 * s3) - s1 * (t1 * s4 - s3 * t2) + s2 * (t1 * s3 - s2 * t2)) / det
-    b = (s0 * (t1 * s4 - s3 * t2) - t0 * (s1 * s4 - s3 * s2) + s2 * (s1 * t2 - t1 * s2)) / det
-    c = (s0 * (s2 * t2 - t1 * s3) - s1 * (s1 * t2 - t1 * s2) + t0 * (s1 * s3 - s2 * s2)) / det
-    return a, b, c
+def _quadratic_fits(powers: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Least-squares ``y = a + b x + c x^2`` for each row of ``y`` ``(L, N)`` over the points
+    that ``w`` ``(L, N)`` (bool) selects, by the normal equations: ``(L, 3)`` coefficients.
+    ``powers`` is ``(N, 5)``: ``x**0 .. x**4``. Rows with fewer than 3 points, or degenerate
+    ones, get their mean (or 0) as a constant."""
+    wf = w.astype(np.float64)
+    s0, s1, s2, s3, s4 = (wf @ powers).T
+    t0, t1, t2 = ((wf * y) @ powers[:, :3]).T
+    m0, m1, m2 = s2 * s4 - s3 * s3, s1 * s4 - s3 * s2, s1 * s3 - s2 * s2
+    det = s0 * m0 - s1 * m1 + s2 * m2
+    ok = (s0 >= 3) & (np.abs(det) >= 1e-12)
+    dd = np.where(ok, det, 1.0)
+    out = np.empty((len(w), 3))
+    out[:, 0] = np.where(ok, (t0 * m0 - s1 * (t1 * s4 - s3 * t2) + s2 * (t1 * s3 - s2 * t2)) / dd,
+                         t0 / np.maximum(s0, 1.0))
+    out[:, 1] = np.where(ok, (s0 * (t1 * s4 - s3 * t2) - t0 * m1 + s2 * (s1 * t2 - t1 * s2)) / dd, 0.0)
+    out[:, 2] = np.where(ok, (s0 * (s2 * t2 - t1 * s3) - s1 * (s1 * t2 - t1 * s2) + t0 * m2) / dd, 0.0)
+    return out
 
 
 def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float) -> np.ndarray:
@@ -850,47 +939,50 @@ def _remove_grid_lines(rect: np.ndarray, n: int, s: int, o: int, present: float)
     line pulls the peak away there). A line that is not there for most of its length (a
     missing frame side) is left alone; a line that is there is blanked over its own width
     along the fitted track. Only the line's band goes: an O drawn against a line keeps the
-    rest of its ring.
+    rest of its ring. (All lines of a family are tracked and fitted at once.)
     """
-    out = rect.copy()
     b = max(2, s // 5)
     side = rect.shape[0]
-    ys = np.arange(side, dtype=np.float64)
-    along = (cv2.blur(rect, (1, 9)), cv2.blur(rect, (9, 1)).T)  # smoothed along the lines of each family
-    for transpose in (False, True):
-        dst = out.T if transpose else out
-        smooth = along[int(transpose)]
-        for i in range(n + 1):
-            x = o + i * s
-            lo, hi = max(0, x - b), min(side, x + b + 1)
-            band = smooth[:, lo:hi]
-            arg = band.argmax(axis=1)
-            peak = band[np.arange(side), arg]
-            on = peak > present
-            field = slice(o, o + n * s)
-            if on[field].mean() < 0.5:
-                continue
-            rows = np.flatnonzero(on)
-            centre = arg[rows] + lo
-            keep = np.ones(len(rows), bool)
-            yr = ys[rows] / side
-            for _ in range(3):  # quadratic track, refitted without the rows that stray
-                coef = _quadratic_fit(yr[keep], centre[keep])
-                fitted = coef[0] + yr * (coef[1] + yr * coef[2])
-                keep = np.abs(centre - fitted) <= 2.0
-                if keep.sum() < 0.3 * len(rows):
-                    break
-            if keep.sum() < 0.7 * n * s:  # no straight line along most of the field: symbols only
-                continue
-            track = np.zeros(side)
-            track[rows] = fitted
-            width = (band[rows[keep]] > 0.5 * peak[rows[keep], None]).sum(axis=1) if keep.any() else np.array([3])
-            half = 0.5 * float(np.median(width)) + 1.5
-            cols = np.arange(lo, hi)
-            blank = np.abs(cols[None, :] - track[rows, None]) <= half
-            sub = dst[rows, lo:hi]
-            sub[blank] = 0.0
-            dst[rows, lo:hi] = sub
+    n_lines, width = n + 1, 2 * b + 1
+    yr = np.arange(side, dtype=np.float64) / side
+    powers = yr[:, None] ** np.arange(5)
+    field = slice(o, o + n * s)
+    lo = o + s * np.arange(n_lines) - b  # each line's band: lo .. lo + 2b across it
+    idx = lo[:, None] + np.arange(width)
+    blank = np.zeros(rect.shape, bool)
+    for flat, blank_view in ((rect.T, blank.T), (rect, blank)):  # columns, rows: bands as (line, across, along)
+        raw = flat[idx]
+        # smoothed along the line (9 px), as a blur of the stacked band rows
+        bands = cv2.blur(raw.reshape(n_lines * width, side), (9, 1)).reshape(raw.shape)
+        arg = bands.argmax(axis=1)
+        peak = np.take_along_axis(bands, arg[:, None, :], axis=1)[:, 0, :]
+        on = peak > present
+        centre = (arg + lo[:, None]).astype(np.float64)
+        live = on[:, field].mean(axis=1) >= 0.5  # lines not there for most of their length stay
+        keep = on.copy()
+        fitted = np.zeros(on.shape)
+        for _ in range(3):  # quadratic track per line, refitted without the rows that stray
+            coef = _quadratic_fits(powers, centre, keep)
+            new_fit = coef[:, :1] + yr * (coef[:, 1:2] + yr * coef[:, 2:3])
+            new_keep = on & (np.abs(centre - new_fit) <= 2.0)
+            fitted[live] = new_fit[live]
+            keep[live] = new_keep[live]
+            live &= new_keep.sum(axis=1) >= 0.3 * on.sum(axis=1)
+        # a line needs a straight track along most of the field (else: symbols only)
+        count = keep.sum(axis=1)
+        live &= count >= 0.7 * n * s
+        if not live.any():
+            continue
+        # the line's own width: the median over its kept track of the samples above half its peak
+        across = np.where(keep, (bands > 0.5 * peak[:, None, :]).sum(axis=1), width + 1)
+        across.sort(axis=1)
+        k = np.maximum(count, 1)
+        rows = np.arange(n_lines)
+        half = 0.25 * (across[rows, (k - 1) // 2] + across[rows, k // 2]) + 1.5
+        cut = np.abs(idx[:, :, None] - fitted[:, None, :]) <= half[:, None, None]
+        blank_view[idx] |= cut & on[:, None, :] & live[:, None, None]
+    out = rect.copy()
+    out[blank] = 0.0
     return out
 
 
