@@ -417,6 +417,7 @@ class Fix:
 
 _GN_STEPS = 2
 _OTHERS = ((1, 2), (0, 2), (0, 1))  # the kept arms when arm 0, 1 or 2 moves
+_PROBE_BLOCK = 64  # triples screened at a time when a grip's own index cell is probed
 
 
 def _fit(p: np.ndarray, h: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -481,20 +482,20 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
     ``steps=0`` stops at the Kabsch heading (with its best translation): its chi-square is an
     upper bound of the weighted optimum's, so ``chi2 <= gate`` there proves the triple passes.
     """
-    hmx, hmy = (hx[0] + hx[1] + hx[2]) / 3, (hy[0] + hy[1] + hy[2]) / 3
-    pmx, pmy = (px[0] + px[1] + px[2]) / 3, (py[0] + py[1] + py[2]) / 3
-    dot = cross = 0.0
-    for i in range(3):
-        ax, ay, bx, by = hx[i] - hmx, hy[i] - hmy, px[i] - pmx, py[i] - pmy
-        dot += ax * bx + ay * by
-        cross += ax * by - ay * bx
-    th = math.atan2(cross, dot)
+    px0, px1, px2 = px
+    py0, py1, py2 = py
+    hx0, hx1, hx2 = hx
+    hy0, hy1, hy2 = hy
+    hmx, hmy = (hx0 + hx1 + hx2) / 3, (hy0 + hy1 + hy2) / 3
+    pmx, pmy = (px0 + px1 + px2) / 3, (py0 + py1 + py2) / 3
+    ax0, ay0, ax1, ay1, ax2, ay2 = hx0 - hmx, hy0 - hmy, hx1 - hmx, hy1 - hmy, hx2 - hmx, hy2 - hmy
+    bx0, by0, bx1, by1, bx2, by2 = px0 - pmx, py0 - pmy, px1 - pmx, py1 - pmy, px2 - pmx, py2 - pmy
+    th = math.atan2(ax0 * by0 - ay0 * bx0 + ax1 * by1 - ay1 * bx1 + ax2 * by2 - ay2 * bx2,
+                    ax0 * bx0 + ay0 * by0 + ax1 * bx1 + ay1 * by1 + ax2 * bx2 + ay2 * by2)
     (a0, b0, c0), (a1, b1, c1), (a2, b2, c2) = w
     sa, sb, sc = a0 + a1 + a2, b0 + b1 + b2, c0 + c1 + c2
     det = sa * sc - sb * sb
     ia, ib, ic = sc / det, -sb / det, sa / det  # S^-1
-    px0, px1, px2, py0, py1, py2 = px[0], px[1], px[2], py[0], py[1], py[2]
-    hx0, hx1, hx2, hy0, hy1, hy2 = hx[0], hx[1], hx[2], hy[0], hy[1], hy[2]
     it = 0
     while True:
         c, s = math.cos(th), math.sin(th)
@@ -550,6 +551,7 @@ def _pose_covariance(pose: np.ndarray, h: np.ndarray, cov_body: np.ndarray) -> n
         w = np.linalg.inv(rot @ cov_body[i] @ rot.T)
         info += jac.T @ w @ jac
     return np.linalg.inv(info)
+
 
 
 class TriangleIndex:
@@ -1031,26 +1033,37 @@ class Localizer:
 
     def _probe_cell(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],
                     w: list[tuple[float, float, float]]) -> AmbiguousFixError | None:
-        """An ambiguity verdict from the single cell of the measured sides, or None."""
+        """An ambiguity verdict from the single cell of the measured sides, or None.
+
+        Two triples that pass prove it, and on a dense wall the cell holds hundreds that do:
+        the cell is screened a block at a time (first-order chi-square, best first within a
+        block) and at most 8 triples get the exact test, so the verdict costs a block, not
+        the cell."""
         cross = (hx[1] - hx[0]) * (hy[2] - hy[0]) - (hy[1] - hy[0]) * (hx[2] - hx[0])
         order = (0, 1, 2) if cross > 0 else (0, 2, 1)
         sides, S, sinv = self._sides(hx, hy, cov, order)
         verts, got = self.index.cell_of(sides)
         if len(verts) < 2:
             return None
-        r = got - sides
-        c1 = ((r @ np.array(sinv)) * r).sum(axis=1)
-        best = np.argpartition(c1, 7)[:8] if len(c1) > 8 else np.arange(len(c1))  # O(K), not a sort
-        best = best[np.argsort(c1[best], kind="stable")]
-        rows = verts[best[c1[best] <= self._limit]]
-        if order != (0, 1, 2):
-            rows = rows[:, (0, 2, 1)]
-        xs, ys, proof = self._xs, self._ys, []
-        for v in rows.tolist():  # the Kabsch pose's chi-square bounds the optimum's from above
-            if _fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w, 0)[3] <= self._limit:
-                proof.append(v)
-                if len(proof) == 2:
-                    return self._lazy_ambiguity(hx, hy, cov, w, proof)
+        m = np.array(sinv)
+        xs, ys, limit, proof, tries = self._xs, self._ys, self._limit, [], 0
+        for start in range(0, len(verts), _PROBE_BLOCK):
+            r = got[start:start + _PROBE_BLOCK] - sides
+            c1 = ((r @ m) * r).sum(axis=1)
+            ok = np.flatnonzero(c1 <= limit)
+            if not len(ok):
+                continue
+            rows = verts[start + ok[np.argsort(c1[ok], kind="stable")]]
+            if order != (0, 1, 2):
+                rows = rows[:, (0, 2, 1)]
+            for v in rows.tolist():  # the Kabsch pose's chi-square bounds the optimum's from above
+                if _fit_one([xs[v[0]], xs[v[1]], xs[v[2]]], [ys[v[0]], ys[v[1]], ys[v[2]]], hx, hy, w, 0)[3] <= limit:
+                    proof.append(v)
+                    if len(proof) == 2:
+                        return self._lazy_ambiguity(hx, hy, cov, w, proof)
+                tries += 1
+                if tries >= 8:
+                    return None
         return None
 
     def _lazy_ambiguity(self, hx: list[float], hy: list[float], cov: list[tuple[float, float, float]],

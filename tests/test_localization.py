@@ -101,6 +101,32 @@ def test_regular_grid_is_reported_ambiguous() -> None:
     assert sum(c.likelihood for c in err.candidates) == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("block", [1, 3, 64])
+def test_dense_wall_ambiguity_is_proven_from_the_grip_cell(block: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """On a dense jittered wall a grip's own index cell holds many congruent triples; the
+    probe screens it a block at a time and proves the ambiguity with two exact passes, which
+    must be among the triples the full search finds passing."""
+    import kinematics.localization as loc_mod
+
+    monkeypatch.setattr(loc_mod, "_PROBE_BLOCK", block)
+    wall = HoleMap.grid(30, 30, spacing=20, jitter=0.5, seed=4)
+    loc = Localizer(wall, GEOM, NoiseModel(sigma_angle=math.radians(0.1), sigma_map=0.01))
+    sim = GripSimulator(loc.index, GEOM, math.radians(0.1), seed=5)
+    proven = 0
+    for _ in range(20):
+        grip = sim.grip()
+        hx, hy, cov, w = loc._measure(grip.q_measured)
+        verdict = loc._probe_cell(hx, hy, cov, w)
+        if verdict is None:
+            continue
+        proven += 1
+        passing = {c.holes for c in verdict.candidates}
+        assert len(passing) >= 2 and tuple(grip.holes) in passing
+        _, _, chi2, _ = loc.search(grip.q_measured)
+        assert (chi2 <= loc._limit).sum() == verdict.count
+    assert proven >= 15
+
+
 def test_seed_example_right_answer() -> None:
     wall = HoleMap.from_config("seed_4x4")
     # the seed's own way (fixed tolerance): unique, and not what the seed printed
