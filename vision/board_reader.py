@@ -137,8 +137,9 @@ def ink_map(image: object, stroke_px: float = 12.0) -> np.ndarray:
     padded = cv2.copyMakeBorder(y8, k, k, k, k, cv2.BORDER_REPLICATE)
     bg = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)))[k:-k, k:-k]
     # a closing never darkens, so 0 <= y8 <= bg and the darkness lies in 0..1 as it is
-    d = np.divide(y8, np.maximum(bg, 8), dtype=np.float32)
-    return np.subtract(1.0, d, out=d, dtype=np.float32)
+    d = y8.astype(np.float32)
+    np.divide(d, cv2.max(bg, 8).astype(np.float32), out=d)  # (cv2.max: numpy's is 6x slower on uint8)
+    return np.subtract(1.0, d, out=d)
 
 
 # ------------------------------------------------------------------ lines
@@ -566,7 +567,7 @@ class BoardReader:
                       ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int]:
         h, w = d.shape
         mask = (d > t0).astype(np.uint8)
-        if mask.mean() < 1e-4:
+        if cv2.countNonZero(mask) < 1e-4 * mask.size:
             raise NoBoardError("the image holds no ink")
         # straight segments on a shrunk copy (Hough costs grow with the ink pixels), then
         # each merged line refitted to the full-resolution ink around it
