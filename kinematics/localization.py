@@ -1157,9 +1157,10 @@ class Localizer:
         for v in self._track_verts(holes, hx, hy, cov, moved_arm):
             x, y, th, chi2, res = _fit_one((xs[v[0]], xs[v[1]], xs[v[2]]), (ys[v[0]], ys[v[1]], ys[v[2]]), hx, hy, w)
             fits.append((chi2, v, x, y, th, res))
-        if len(fits) > 1:  # usually one hole lies near the prediction: nothing to order
-            fits.sort(key=lambda f: f[0])
-        if self.noise.tolerance is None:  # the common case without building every candidate
+        if self.noise.tolerance is None and len(fits) == 1 and fits[0][0] <= self._limit:
+            return Fix(self._from_fit(fits[0]), None, 1, (hx, hy), cov)  # the usual step: one hole near
+        fits.sort(key=lambda f: f[0])
+        if self.noise.tolerance is None:  # without building every candidate
             passed = [f for f in fits if f[0] <= self._limit]
             if len(passed) == 1:
                 best = passed[0]
