@@ -553,7 +553,6 @@ def _pose_covariance(pose: np.ndarray, h: np.ndarray, cov_body: np.ndarray) -> n
     return np.linalg.inv(info)
 
 
-
 class TriangleIndex:
     """Every hole triangle the climber can hold, keyed by its sides in counter-clockwise order.
 

@@ -269,6 +269,14 @@ def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
     return np.array([(a.rho * sb - b.rho * sa) / det, (ca * b.rho - cb * a.rho) / det])
 
 
+def _line_arrays(lines: list[_Line]) -> tuple[np.ndarray, ...]:
+    """cos, sin of the normals, rho, start points ``(L, 2)`` and drawn lengths of lines."""
+    th = np.array([ln.theta for ln in lines])
+    p0 = np.array([ln.p0 for ln in lines])
+    p1 = np.array([ln.p1 for ln in lines])
+    return np.cos(th), np.sin(th), np.array([ln.rho for ln in lines]), p0, np.hypot(*(p1 - p0).T)
+
+
 def _refit(lines: list[_Line], ink: np.ndarray, floor: float, band: float) -> list[_Line | None]:
     """Each line refitted to the full-resolution ink map around it: every 3 px along the line
     (and a little past its ends), the darkness-weighted centre of the ink within ``band`` px
@@ -277,11 +285,8 @@ def _refit(lines: list[_Line], ink: np.ndarray, floor: float, band: float) -> li
     if not lines:
         return []
     h, w = ink.shape
-    p0 = np.array([ln.p0 for ln in lines])
-    th = np.array([ln.theta for ln in lines])
-    nrm = np.stack([np.cos(th), np.sin(th)], -1)
-    dirv = np.stack([-nrm[:, 1], nrm[:, 0]], -1)
-    length = np.hypot(*(np.array([ln.p1 for ln in lines]) - p0).T)
+    cs, sn, _, p0, length = _line_arrays(lines)
+    nrm, dirv = np.stack([cs, sn], -1), np.stack([-sn, cs], -1)
     count = np.ceil((length + 2.0 * band + 1.0) / 3.0).astype(np.intp)  # samples along each line
     t = -band + 3.0 * np.arange(int(count.max()))
     u = np.arange(-math.ceil(band), math.ceil(band) + 1.0)
@@ -300,14 +305,6 @@ def _refit(lines: list[_Line], ink: np.ndarray, floor: float, band: float) -> li
     for i, fit in zip(good, fits):
         out[i] = fit
     return out
-
-
-def _line_arrays(lines: list[_Line]) -> tuple[np.ndarray, ...]:
-    """cos, sin of the normals, rho, start points ``(L, 2)`` and drawn lengths of lines."""
-    th = np.array([ln.theta for ln in lines])
-    p0 = np.array([ln.p0 for ln in lines])
-    p1 = np.array([ln.p1 for ln in lines])
-    return np.cos(th), np.sin(th), np.array([ln.rho for ln in lines]), p0, np.hypot(*(p1 - p0).T)
 
 
 def _crossing(fam: list[_Line], other: list[_Line], slack: float) -> list[_Line]:
