@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -620,7 +621,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "map_sigma", 0) is None:
             args.map_sigma = args.map_default
         func: Callable[[argparse.Namespace], int] = args.func
-        return func(args)
+        code = func(args)
+        sys.stdout.flush()  # a closed pipe shows here, inside the handler below, not at exit
+        return code
+    except BrokenPipeError:  # the reader went away (``kinegym ... | head``): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        return 141  # 128 + SIGPIPE, as a shell reports it
     except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]
         code = next(c for t, c in handlers if isinstance(exc, t))
         if want_json:

@@ -90,6 +90,13 @@ def test_console_script_help_and_no_traceback() -> None:
         assert done.returncode == 0 and "usage" in done.stdout
     bad = subprocess.run([str(exe), "ik", "arm", "--target", "a,b,c"], capture_output=True, text=True)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    # a reader that goes away (`kinegym ... | head`) ends the command quietly
+    for argv in (["--help"], ["solve", "X...|.O..|....|....", "--k", "3"]):
+        proc = subprocess.Popen([str(exe), *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc.stdout.close()  # type: ignore[union-attr]
+        err = proc.stderr.read()  # type: ignore[union-attr]
+        proc.wait(timeout=60)
+        assert "Traceback" not in err and "Exception ignored" not in err, err
 
 
 def test_import_kinegym_is_light() -> None:
