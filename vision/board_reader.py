@@ -260,15 +260,6 @@ def _union_length(intervals: Sequence[tuple[float, float]]) -> float:
     return float(cover + hi - lo)
 
 
-def _intersect(a: _Line, b: _Line) -> np.ndarray | None:
-    """Crossing point of two lines (px), None if they are parallel."""
-    ca, sa, cb, sb = math.cos(a.theta), math.sin(a.theta), math.cos(b.theta), math.sin(b.theta)
-    det = ca * sb - sa * cb
-    if abs(det) < 1e-9:
-        return None
-    return np.array([(a.rho * sb - b.rho * sa) / det, (ca * b.rho - cb * a.rho) / det])
-
-
 def _line_arrays(lines: list[_Line]) -> tuple[np.ndarray, ...]:
     """cos, sin of the normals, rho, start points ``(L, 2)`` and drawn lengths of lines."""
     th = np.array([ln.theta for ln in lines])
@@ -307,22 +298,30 @@ def _refit(lines: list[_Line], ink: np.ndarray, floor: float, band: float) -> li
     return out
 
 
+def _crossings(fam: list[_Line], other: list[_Line]) -> tuple[np.ndarray, ...]:
+    """Crossing points of every line of ``fam`` with every line of ``other``: ``x, y`` (px)
+    and ``ok`` (not parallel), each ``(len(fam), len(other))``, and the two families' line
+    arrays (:func:`_line_arrays`) for further use."""
+    A, B = _line_arrays(fam), _line_arrays(other)
+    ca, sa, ra = (v[:, None] for v in A[:3])
+    cb, sb, rb = (v[None, :] for v in B[:3])
+    det = ca * sb - sa * cb
+    ok = np.abs(det) >= 1e-9
+    det = np.where(ok, det, 1.0)
+    return (ra * sb - rb * sa) / det, (ca * rb - cb * ra) / det, ok, A, B
+
+
 def _crossing(fam: list[_Line], other: list[_Line], slack: float) -> list[_Line]:
     """The lines of ``fam`` that cross at least two lines of ``other``, and at least half
     of them, within both lines' drawn extents (``slack`` px beyond the ends allowed): a
     paper edge, a shadow's edge or a row of symbol strokes crosses few of the field's lines."""
     if len(other) < 2 or not fam:
         return fam
-    ca, sa, ra, pa, la = (v[:, None] for v in _line_arrays(fam))
-    cb, sb, rb, pb, lb = (v[None, :] for v in _line_arrays(other))
-    det = ca * sb - sa * cb
-    ok = np.abs(det) >= 1e-9
-    det = np.where(ok, det, 1.0)
-    x, y = (ra * sb - rb * sa) / det, (ca * rb - cb * ra) / det  # the crossings (A, B)
+    x, y, ok, (ca, sa, _, pa, la), (cb, sb, _, pb, lb) = _crossings(fam, other)
     # positions along each line (direction: the normal turned a quarter)
-    ta = (x - pa[..., 0]) * -sa + (y - pa[..., 1]) * ca
-    tb = (x - pb[..., 0]) * -sb + (y - pb[..., 1]) * cb
-    hit = ok & (ta >= -slack) & (ta <= la + slack) & (tb >= -slack) & (tb <= lb + slack)
+    ta = (x - pa[:, None, 0]) * -sa[:, None] + (y - pa[:, None, 1]) * ca[:, None]
+    tb = (x - pb[None, :, 0]) * -sb[None, :] + (y - pb[None, :, 1]) * cb[None, :]
+    hit = (ok & (ta >= -slack) & (ta <= la[:, None] + slack) & (tb >= -slack) & (tb <= lb[None, :] + slack))
     need = max(2, (len(other) + 1) // 2)
     return [a for a, h in zip(fam, hit.sum(axis=1)) if h >= need]
 
@@ -708,9 +707,9 @@ class BoardReader:
         which would halve the spacing, loses. The cells around the middle come first (stray
         lines sit at the ends); each hypothesis is refined on its inliers.
         """
-        P = np.array([[p if (p := _intersect(a, b)) is not None else (np.nan, np.nan) for b in rows] for a in cols],
-                     dtype=np.float64).reshape(-1, 2)
-        P = P[np.all(np.isfinite(P), axis=1)]
+        x, y, ok, _, _ = _crossings(cols, rows)
+        cross = np.stack([x, y], -1)  # (cols, rows, 2)
+        P = cross[ok]
         if len(P) < 4:
             raise NoBoardError("the grid lines do not intersect")
         unit = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
@@ -722,12 +721,12 @@ class BoardReader:
         for group in (middle, rest):
             H0s = []
             for a, b in group:
-                quad = [_intersect(cols[a], rows[b]), _intersect(cols[a + 1], rows[b]),
-                        _intersect(cols[a + 1], rows[b + 1]), _intersect(cols[a], rows[b + 1])]
-                if any(q is None for q in quad):
+                corners = ((a, b), (a + 1, b), (a + 1, b + 1), (a, b + 1))
+                if not all(ok[c] for c in corners):
                     continue
                 try:
-                    H0 = cv2.getPerspectiveTransform(unit, np.array(quad, np.float32)).astype(np.float64)
+                    H0 = cv2.getPerspectiveTransform(unit, np.array([cross[c] for c in corners], np.float32)
+                                                     ).astype(np.float64)
                 except cv2.error:
                     continue
                 if abs(np.linalg.det(H0)) > 1e-12:
