@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import operator
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,9 +171,9 @@ class _SpatialHash:
     def __init__(self, xy: np.ndarray, cell: float) -> None:
         self.xy, self.cell = xy, float(cell)
         self.pts = [tuple(p) for p in xy.tolist()]
-        cells: dict[tuple[int, int], list[int]] = {}
+        cells: dict[tuple[int, int], list[tuple[int, float, float]]] = {}
         for i, (cx, cy) in enumerate(np.floor(xy / self.cell).astype(np.int64).tolist()):
-            cells.setdefault((cx, cy), []).append(i)
+            cells.setdefault((cx, cy), []).append((i, *self.pts[i]))
         self.cells = cells
 
     def within_list(self, px: float, py: float, radius: float) -> list[int]:
@@ -181,12 +182,12 @@ class _SpatialHash:
         y0, y1 = math.floor((py - radius) / c), math.floor((py + radius) / c)
         r2 = radius * radius
         out = []
-        get, pts = self.cells.get, self.pts
+        get = self.cells.get
         for cx in range(x0, x1 + 1):
             for cy in range(y0, y1 + 1):
-                for i in get((cx, cy), ()):
-                    hx, hy = pts[i]
-                    if (hx - px) ** 2 + (hy - py) ** 2 <= r2:
+                for i, hx, hy in get((cx, cy), ()):
+                    dx, dy = hx - px, hy - py
+                    if dx * dx + dy * dy <= r2:
                         out.append(i)
         return out
 
@@ -320,7 +321,6 @@ class NoiseModel:
         return self._limit  # type: ignore[attr-defined]
 
 
-@dataclass(slots=True, eq=False)
 class Candidate:
     """One hole triple with the rigid fit of the hands onto it.
 
@@ -328,16 +328,36 @@ class Candidate:
     ``pose``: body ``(x, y, heading)`` (cm, cm, rad); ``chi2``: fit statistic (3 dof);
     ``residual_cm``: distance of each hand from its hole after the fit;
     ``likelihood``: probability among the candidates that passed the gate (equal priors).
-    Treat it as read-only (a plain slotted class: a frozen dataclass costs microseconds per
-    fix in tracking).
+    Treat it as read-only. A plain slotted class, not a dataclass: tracking builds one per
+    fix, so ``pose`` and ``residual_cm`` may be given as float sequences and become numpy
+    arrays on first use (two arrays cost ~0.9 us of a ~10 us tracking fix).
     """
 
-    holes: tuple[int, int, int]
-    ids: tuple[tuple[int, int], tuple[int, int], tuple[int, int]]
-    pose: np.ndarray
-    chi2: float
-    residual_cm: np.ndarray
-    likelihood: float = 1.0
+    __slots__ = ("holes", "ids", "_pose", "chi2", "_res", "likelihood")
+
+    def __init__(self, holes: tuple[int, int, int], ids: tuple[tuple[int, int], tuple[int, int], tuple[int, int]],
+                 pose: np.ndarray | Sequence[float], chi2: float, residual_cm: np.ndarray | Sequence[float],
+                 likelihood: float = 1.0) -> None:
+        self.holes, self.ids, self._pose, self.chi2, self._res = holes, ids, pose, chi2, residual_cm
+        self.likelihood = likelihood
+
+    @property
+    def pose(self) -> np.ndarray:
+        p = self._pose
+        if type(p) is not np.ndarray:
+            p = self._pose = np.array(p, dtype=float)
+        return p
+
+    @property
+    def residual_cm(self) -> np.ndarray:
+        r = self._res
+        if type(r) is not np.ndarray:
+            r = self._res = np.array(r, dtype=float)
+        return r
+
+    def __repr__(self) -> str:
+        return (f"Candidate(holes={self.holes}, ids={self.ids}, pose={self.pose!r}, chi2={self.chi2!r}, "
+                f"residual_cm={self.residual_cm!r}, likelihood={self.likelihood!r})")
 
     def as_dict(self) -> dict[str, object]:
         return {"ids": [list(i) for i in self.ids], "centre_cm": [round(float(v), 4) for v in self.pose[:2]],
@@ -793,31 +813,29 @@ class Localizer:
         (s0, e0), (s1, e1), (s2, e2) = rows
         if not math.isfinite(s0 + e0 + s1 + e1 + s2 + e2):
             raise InvalidInputError(f"joint angles q={rows!r} hold NaN or infinity; expected radians")
-        hx, hy, cov, w = [], [], [], []
         va, vm = self._var_a, self._var_m
         cos, sin = math.cos, math.sin
+        out = []
         for (s, e), (l1, l2, ox, oy) in zip(rows, self._arms):
             cs, ss = cos(s), sin(s)
-            lo = s - e + math.pi
-            cl, sl = cos(lo), sin(lo)
-            dlx, dly = -l2 * sl, l2 * cl
-            hx.append(ox + l1 * cs + dly)
-            hy.append(oy + l1 * ss - dlx)
-            dsx, dsy = dlx - l1 * ss, dly + l1 * cs
+            d = s - e  # the lower link points along s - e + pi
+            dlx, dly = l2 * sin(d), -l2 * cos(d)
+            dsx, dsy = dlx - l1 * ss, dly + l1 * cs  # d hand / d shoulder; d hand / d elbow = -(dlx, dly)
             a = va * (dsx * dsx + dlx * dlx) + vm
             b = va * (dsx * dsy + dlx * dly)
             c = va * (dsy * dsy + dly * dly) + vm
-            det = a * c - b * b
-            cov.append((a, b, c))
-            w.append((c / det, -b / det, a / det))
+            r = 1.0 / (a * c - b * b)
+            out.append((ox + l1 * cs + dly, oy + l1 * ss - dlx, (a, b, c), (c * r, -b * r, a * r)))
+        (x0, y0, c0, w0), (x1, y1, c1, w1), (x2, y2, c2, w2) = out
+        hx, hy, cov, w = [x0, x1, x2], [y0, y1, y2], [c0, c1, c2], [w0, w1, w2]
         return hx, hy, cov, w
 
     def _candidate(self, holes: Sequence[int], x: float, y: float, th: float, chi2: float,
                    res: Sequence[float], lik: float = 1.0) -> Candidate:
         ids = self._ids
-        return Candidate((int(holes[0]), int(holes[1]), int(holes[2])),
-                         (ids[holes[0]], ids[holes[1]], ids[holes[2]]),
-                         np.array([x, y, th]), float(chi2), np.array(res, dtype=float), float(lik))
+        h0, h1, h2 = int(holes[0]), int(holes[1]), int(holes[2])
+        return Candidate((h0, h1, h2), (ids[h0], ids[h1], ids[h2]), (float(x), float(y), float(th)), float(chi2),
+                         res, float(lik))
 
     def _evaluate(self, verts: list[tuple[int, int, int]], hx: list[float], hy: list[float],
                   w: list[tuple[float, float, float]]) -> list[Candidate]:
@@ -1157,9 +1175,17 @@ class Localizer:
         hold their holes; the moved hand is looked for near where the kept hands put it.
         ``moved_arm=None``: no hand moved (e.g. a body shift), only the pose is refitted.
         """
-        holes = previous.holes if isinstance(previous, Fix) else tuple(int(v) for v in previous)
-        if len(holes) != 3 or min(holes) < 0 or max(holes) >= len(self._xs):
-            raise InvalidInputError(f"previous holes {holes}; expected 3 map rows in 0..{len(self._xs) - 1}")
+        if isinstance(previous, Fix):
+            holes = previous.best.holes
+        else:
+            try:
+                h0, h1, h2 = previous
+                holes = (operator.index(h0), operator.index(h1), operator.index(h2))
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"previous holes {previous!r}; expected a Fix or 3 integer map rows") from None
+        n = len(self._xs)
+        if not (0 <= holes[0] < n and 0 <= holes[1] < n and 0 <= holes[2] < n):
+            raise InvalidInputError(f"previous holes {holes}; expected 3 map rows in 0..{n - 1}")
         if moved_arm is not None and moved_arm not in (1, 2, 3):
             raise InvalidInputError(f"moved_arm={moved_arm!r}; expected 1, 2, 3 or None")
         hx, hy, cov, w = self._measure(q)
@@ -1183,7 +1209,8 @@ class Localizer:
 
     def _from_fit(self, f: tuple) -> Candidate:
         """A :class:`Candidate` from a tracking fit ``(chi2, holes, x, y, heading, residuals)``."""
-        return self._candidate(f[1], f[2], f[3], f[4], f[0], f[5])
+        ids, (h0, h1, h2) = self._ids, f[1]
+        return Candidate(f[1], (ids[h0], ids[h1], ids[h2]), f[2:5], f[0], f[5])
 
 
 class BayesLocalizer:
