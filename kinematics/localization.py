@@ -343,17 +343,16 @@ class Candidate:
 
     @property
     def pose(self) -> np.ndarray:
-        p = self._pose
-        if type(p) is not np.ndarray:
-            p = self._pose = np.array(p, dtype=float)
-        return p
+        return self._pose if type(self._pose) is np.ndarray else self._to_array("_pose")
 
     @property
     def residual_cm(self) -> np.ndarray:
-        r = self._res
-        if type(r) is not np.ndarray:
-            r = self._res = np.array(r, dtype=float)
-        return r
+        return self._res if type(self._res) is np.ndarray else self._to_array("_res")
+
+    def _to_array(self, slot: str) -> np.ndarray:
+        a = np.array(getattr(self, slot), dtype=float)
+        setattr(self, slot, a)
+        return a
 
     def __repr__(self) -> str:
         return (f"Candidate(holes={self.holes}, ids={self.ids}, pose={self.pose!r}, chi2={self.chi2!r}, "

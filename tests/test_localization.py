@@ -156,6 +156,9 @@ def test_tracking_and_lost_start() -> None:
             if n:
                 tf = loc.track(path[n - 1].holes, g.q_measured, g.moved_arm)
                 assert tf.holes == g.holes
+                # arrays made on first read, then the same array every time
+                assert tf.pose.shape == (3,) and tf.pose is tf.pose and tf.pose.dtype == np.float64
+                assert tf.best.residual_cm.shape == (3,) and np.all(tf.best.residual_cm < 0.1)
             fix = bayes.observe(g.q_measured, g.moved_arm)
             if fix is not None:
                 assert fix.holes == g.holes
@@ -197,6 +200,13 @@ def test_bad_inputs() -> None:
         loc.localize([[0, 1], [1, np.nan], [2, 2]])
     with pytest.raises(InvalidInputError, match="moved_arm"):
         loc.track((0, 1, 2), SEED_ANGLES, 4)
+    for bad in [(0, 1.5, 2), (0, 1), "abc"]:  # a float row, two holes, not holes at all
+        with pytest.raises(InvalidInputError, match="expected a Fix or 3 integer map rows"):
+            loc.track(bad, SEED_ANGLES, 2)
+    with pytest.raises(InvalidInputError, match=r"expected 3 map rows in 0\.\.15"):
+        loc.track((0, 1, 16), SEED_ANGLES, 2)
+    best = loc.candidates(SEED_ANGLES)[0]  # numpy integer rows are map rows too
+    assert loc.track(np.array(best.holes, dtype=np.int64), SEED_ANGLES, None).holes == best.holes
     with pytest.raises(InvalidInputError, match="at least 3"):
         Localizer(HoleMap(ids=np.array([[1, 1]]), xy=np.array([[0.0, 0.0]])), GEOM)
     with pytest.raises(InvalidInputError, match="p_gate"):
