@@ -1031,7 +1031,7 @@ class Localizer:
         hx, hy, cov, w = self._measure(q)
         if self.noise.tolerance is not None:  # the seed's way: every triple within the tolerance
             verts, pose, chi2, res = self._search(hx, hy, cov, w)
-            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(len(verts))]
+            cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i].tolist()) for i in range(len(verts))]
             return self._decide(cands, hx, hy, cov, "global search")
         # Phase 0, for dense regular walls: the one index cell holding the measured sides;
         # two exact passes there settle "ambiguous" without any wider query.
@@ -1122,7 +1122,7 @@ class Localizer:
         (``proof``: triples already shown to pass, kept even if the side screen missed them)."""
         verts, pose, chi2, res = self._search(hx, hy, cov, w)
         n = int(np.searchsorted(chi2, self._limit, "right"))
-        cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i]) for i in range(n)]
+        cands = [self._candidate(verts[i], *pose[i], chi2[i], res[i].tolist()) for i in range(n)]
         seen = {c.holes for c in cands}
         extra = [list(v) for v in proof if tuple(v) not in seen]
         cands += [c for c in self._evaluate(extra, hx, hy, w) if c.chi2 <= self._limit]
