@@ -812,21 +812,22 @@ class Localizer:
         (s0, e0), (s1, e1), (s2, e2) = rows
         if not math.isfinite(s0 + e0 + s1 + e1 + s2 + e2):
             raise InvalidInputError(f"joint angles q={rows!r} hold NaN or infinity; expected radians")
+        hx, hy, cov, w = [], [], [], []
         va, vm = self._var_a, self._var_m
         cos, sin = math.cos, math.sin
-        out = []
         for (s, e), (l1, l2, ox, oy) in zip(rows, self._arms):
             cs, ss = cos(s), sin(s)
             d = s - e  # the lower link points along s - e + pi
             dlx, dly = l2 * sin(d), -l2 * cos(d)
+            hx.append(ox + l1 * cs + dly)
+            hy.append(oy + l1 * ss - dlx)
             dsx, dsy = dlx - l1 * ss, dly + l1 * cs  # d hand / d shoulder; d hand / d elbow = -(dlx, dly)
             a = va * (dsx * dsx + dlx * dlx) + vm
             b = va * (dsx * dsy + dlx * dly)
             c = va * (dsy * dsy + dly * dly) + vm
             r = 1.0 / (a * c - b * b)
-            out.append((ox + l1 * cs + dly, oy + l1 * ss - dlx, (a, b, c), (c * r, -b * r, a * r)))
-        (x0, y0, c0, w0), (x1, y1, c1, w1), (x2, y2, c2, w2) = out
-        hx, hy, cov, w = [x0, x1, x2], [y0, y1, y2], [c0, c1, c2], [w0, w1, w2]
+            cov.append((a, b, c))
+            w.append((c * r, -b * r, a * r))
         return hx, hy, cov, w
 
     def _candidate(self, holes: Sequence[int], x: float, y: float, th: float, chi2: float,
