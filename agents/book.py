@@ -3,10 +3,10 @@
 Early in a 5 x 5 four-in-a-row game the exact search takes seconds (from the empty board
 about a minute); a few stones later it takes milliseconds. The book closes that gap: it
 holds the game value of every legal position with at most ``max_stones`` stones, keyed by
-:func:`agents.minimax.canonical_key` (so one entry serves all 8 symmetric copies), and
+:func:`kinegym.agents.solver.canonical_key` (so one entry serves all 8 symmetric copies), and
 :func:`child_values` turns it into the value of every move of a position with fewer
 stones. Nothing in it is typed in: :func:`build` computes it with :class:`Solver`, and
-``python -m agents.book --board 5 --k 4 --stones 4`` rebuilds the shipped file
+``python -m kinegym.agents.book --board 5 --k 4 --stones 4`` rebuilds the shipped file
 (``agents/data/book_5x5x4.npz``); the tests re-solve a sample of entries.
 """
 
@@ -20,13 +20,22 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.game import EMPTY, Board, Game, InvalidPositionError
+from kinegym.agents.solver import GAMES, Solver, canonical_key
+from kinegym.envs.game import EMPTY, Board, Game, InvalidPositionError
 
-from .minimax import GAMES, Solver, canonical_key
-
-__all__ = ["BOOK_DIR", "book_path", "load", "child_values", "positions", "build", "save"]
+__all__ = ["BOOK_DIR", "SHIPPED", "MissingBookError", "book_path", "load", "child_values", "positions", "build",
+           "save"]
 
 BOOK_DIR = Path(__file__).resolve().parent / "data"
+#: ``(rows, cols, k)`` of the games whose book ships with kinegym (in ``agents/data/``).
+SHIPPED: frozenset[tuple[int, int, int]] = frozenset({(5, 5, 4)})
+
+
+class MissingBookError(FileNotFoundError):
+    """A book that ships with kinegym is not where it belongs: a broken install, not a choice.
+
+    Without it the 5 x 5 solver would search each early move from scratch (about a minute),
+    so this is raised instead of quietly playing on without the book."""
 
 
 def book_path(game: Game) -> Path:
@@ -36,9 +45,14 @@ def book_path(game: Game) -> Path:
 
 @lru_cache(maxsize=8)
 def load(game: Game) -> tuple[dict[int, int], int] | None:
-    """``(values by canonical key, max_stones)`` of the shipped book, or None without one."""
+    """``(values by canonical key, max_stones)`` of the shipped book; None for a game that has
+    no book (see :data:`SHIPPED`); :class:`MissingBookError` when a shipped book is missing."""
     path = book_path(game)
     if not path.is_file():
+        if (game.rows, game.cols, game.k) in SHIPPED:
+            raise MissingBookError(
+                f"the opening book of {game} ships with kinegym but {path} is missing: reinstall kinegym, or "
+                f"rebuild it with python -m kinegym.agents.book --board {game.rows} --k {game.k} --stones 4")
         return None
     with np.load(path) as data:
         hi, lo = data["key_hi"].astype(object), data["key_lo"].astype(object)

@@ -2,7 +2,7 @@
 
 A *stance* is which hole each arm holds, ``(h1, h2, h3)`` (map rows, arms labelled). An
 edge moves one arm to another hole and exists when the gait model
-(:func:`envs.sim.climber.plan_move`) finds it feasible: one body pose within reach of the
+(:func:`kinegym.envs.sim.climber.plan_move`) finds it feasible: one body pose within reach of the
 four holes involved, elbows within limits, and the servos and grippers able to hold the
 body while the arm swings. The goal is a hole: any arm gripping it.
 
@@ -23,7 +23,7 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from envs.sim.climber import (
+from kinegym.envs.sim.climber import (
     ClimberModel,
     MovePlan,
     candidate_holes,
@@ -32,7 +32,7 @@ from envs.sim.climber import (
     stance_hops,
     start_stances,
 )
-from kinematics.localization import HoleMap
+from kinegym.kinematics.localization import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
 
@@ -66,7 +66,7 @@ class GaitPlanner:
         weight: A* weight ``w >= 1`` (1 = shortest routes, larger = faster search).
         heading: body heading the gait keeps (rad).
         candidates: only moves to the ``candidates`` holes nearest the held holes
-            (:func:`envs.sim.climber.candidate_holes`, the environment's action set); None
+            (:func:`kinegym.envs.sim.climber.candidate_holes`, the environment's action set); None
             allows every hole within reach.
     """
 
@@ -115,14 +115,14 @@ class GaitPlanner:
 
     def hops(self, goal: int) -> list[int]:
         """Per hole: hops to ``goal`` through holes at most one arm span apart
-        (:func:`envs.sim.climber.hop_counts`)."""
+        (:func:`kinegym.envs.sim.climber.hop_counts`)."""
         got = self._hops.get(goal)
         if got is None:
             got = self._hops[goal] = hop_counts(self.holes, goal, self.span)
         return got
 
     def heuristic(self, stance: Stance, goal: int) -> float:
-        """Admissible lower bound on the moves left (:func:`envs.sim.climber.stance_hops`)."""
+        """Admissible lower bound on the moves left (:func:`kinegym.envs.sim.climber.stance_hops`)."""
         return float(stance_hops(self.hops(goal), stance))
 
     def plan(self, start: Sequence[int], goal: int, max_expansions: int = 20_000) -> Route:

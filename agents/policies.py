@@ -1,5 +1,5 @@
 """Policies as agents for kinegym's environments: a trained masked policy behind the same
-``act(env, obs)`` interface as the planner (:class:`agents.gait_planner.PlannerAgent`)."""
+``act(env, obs)`` interface as the planner (:class:`kinegym.agents.gait_planner.PlannerAgent`)."""
 
 from __future__ import annotations
 

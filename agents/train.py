@@ -2,7 +2,7 @@
 planner, and tune hyper-parameters on Optuna.
 
 One readable script in the CleanRL spirit, behind ``kinegym train gait``, ``kinegym
-evaluate gait`` and ``kinegym tune gait`` (also ``python -m agents.train ...``):
+evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym.agents.train ...``):
 
 * **Configuration**, RL-Zoo style: ``configs/train/hole_climb_maskable_ppo.yaml`` holds one
   section per env id (``n_envs``, ``n_timesteps``, ``policy``, ``policy_kwargs``,
@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-import configs as _configs
+import kinegym.configs as _configs
 
 __all__ = [
     "TRAIN_SCHEMA",
@@ -366,7 +366,7 @@ def _monitor_rows(run: Path) -> tuple[np.ndarray, np.ndarray]:
 def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
     """``learning_curve.png``: validation success (evaluation callback) and the rolling
     training success over env steps (earlier runs of a resumed chain included)."""
-    from envs.draw import line_chart, save_rgb
+    from kinegym.envs.draw import line_chart, save_rgb
 
     series: dict[str, tuple[Any, Any]] = {}
     xs, ys = [], []
@@ -443,8 +443,8 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
     import gymnasium as gym
 
     import kinegym  # noqa: F401
-    from agents.gait_planner import PlannerAgent
-    from agents.policies import MaskedPolicyAgent
+    from kinegym.agents.gait_planner import PlannerAgent
+    from kinegym.agents.policies import MaskedPolicyAgent
 
     if walls not in ("held-out", "validation"):
         raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
@@ -563,7 +563,7 @@ def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config:
 
 # ------------------------------------------------------------------ command line
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m agents.train {train,evaluate,tune} ...`` - the same as ``kinegym ... gait``."""
+    """``python -m kinegym.agents.train {train,evaluate,tune} ...`` - the same as ``kinegym ... gait``."""
     from kinegym.cli import main as cli_main
 
     args = list(sys.argv[1:] if argv is None else argv)

@@ -22,8 +22,8 @@ import time
 
 import numpy as np
 
-from envs.sim import strokes as S
-from envs.sim.arm import ArmSim
+from kinegym.envs.sim import strokes as S
+from kinegym.envs.sim.arm import ArmSim
 
 
 def main() -> None:

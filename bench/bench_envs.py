@@ -27,8 +27,8 @@ import gymnasium as gym
 import numpy as np
 
 import kinegym  # noqa: F401
-from envs.sim.climber import ClimberModel, KinematicClimber, candidate_holes, start_stances
-from kinematics.localization import HoleMap
+from kinegym.envs.sim.climber import ClimberModel, KinematicClimber, candidate_holes, start_stances
+from kinegym.kinematics.localization import HoleMap
 
 
 def env_rate(env: gym.Env, seconds: float, masked: bool) -> tuple[float, int]:

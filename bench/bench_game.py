@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from agents.minimax import RandomPlayer, Solver, StrongPlayer, ThesisPlayer, play_game
-from envs.game import CLASSIC, THESIS, O, X
+from kinegym.agents.minimax import RandomPlayer, Solver, StrongPlayer, ThesisPlayer, play_game
+from kinegym.envs.game import CLASSIC, THESIS, O, X
 
 
 def main() -> None:

@@ -22,8 +22,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from kinematics import WritingArm
-from kinematics.ik import ArmSeeds, solve_arm
+from kinegym.kinematics import WritingArm
+from kinegym.kinematics.ik import ArmSeeds, solve_arm
 
 
 def per_call(fn: Callable, calls: Sequence[tuple], reps: int) -> tuple[float, float, list]:

@@ -21,8 +21,8 @@ import timeit
 
 import numpy as np
 
-from kinematics import ClimberGeometry, HoleMap
-from kinematics.localization import (
+from kinegym.kinematics import ClimberGeometry, HoleMap
+from kinegym.kinematics.localization import (
     AmbiguousFixError,
     GripSimulator,
     Localizer,

@@ -4,7 +4,7 @@ Run::
 
     taskset -c 0 python bench/bench_vision.py [--images 500] [--quick]
 
-Sets (seeded, see :func:`envs.sim.scenes.random_scene`):
+Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
 
 * ``hard 5x5``: phone photos - tilt up to 35 deg, board turned up to 30 deg, light
   gradients, shadows, glare, blur, noise, JPEG; hand-drawn fields (some framed, some with
@@ -28,9 +28,9 @@ import time
 
 import numpy as np
 
-from envs.sim.camera import look_at_homography
-from envs.sim.scenes import random_scene
-from vision.board_reader import BoardReader, NoBoardError, ThresholdReader
+from kinegym.envs.sim.camera import look_at_homography
+from kinegym.envs.sim.scenes import random_scene
+from kinegym.vision.board_reader import BoardReader, NoBoardError, ThresholdReader
 
 SETS = (("hard 5x5", 5, "hard", False), ("hard 5x5 + distractors", 5, "hard", True), ("hard 3x3", 3, "hard", False),
         ("lab 5x5", 5, "default", False))

@@ -13,10 +13,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
-from kinematics.localization import HoleMap
+from kinegym.kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
+from kinegym.kinematics.localization import HoleMap
 
-__all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb", "ARM_COLOURS"]
+__all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb",
+    "save_gif", "ARM_COLOURS"]
 
 Colour = tuple[int, int, int]
 #: One colour per climber arm (RGB), in label order.
@@ -209,6 +210,23 @@ def save_rgb(img: np.ndarray, path: str | Path) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(out), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
         raise OSError(f"could not write image {out}")
+    return out
+
+
+def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
+    """Write RGB frames as an animated GIF (Pillow), same-size frames padded if needed."""
+    from PIL import Image
+
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    h = max(f.shape[0] for f in frames)
+    w = max(f.shape[1] for f in frames)
+    imgs = []
+    for f in frames:
+        canvas = np.full((h, w, 3), 255, np.uint8)
+        canvas[: f.shape[0], : f.shape[1]] = f
+        imgs.append(Image.fromarray(canvas).convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
+    imgs[0].save(out, save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0, optimize=False)
     return out
 
 

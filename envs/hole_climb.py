@@ -5,8 +5,8 @@
 The robot hangs from three holes of a vertical wall (gravity along -y). Each step it moves
 one arm to another hole with the seed's gait - shift the body with all three hands
 gripping, release one hand, swing it round the body to the new hole, grip
-(:mod:`envs.sim.climber`). It sees only what its six joint encoders and the localiser
-(:class:`kinematics.localization.Localizer`, tracking after every move) tell it: an
+(:mod:`kinegym.envs.sim.climber`). It sees only what its six joint encoders and the localiser
+(:class:`kinegym.kinematics.localization.Localizer`, tracking after every move) tell it: an
 estimated body pose with its uncertainty and which holes it believes it holds. An episode
 ends when an arm grips the goal hole, or when the robot falls.
 
@@ -18,7 +18,7 @@ simulates each move in pymunk with torque-limited servos and grippers that let g
 ``Discrete(3 * K)`` (``K = candidates``, default 8): action ``a`` moves arm ``a // K``
 (0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the centroid of
 the holes the robot believes it holds, nearest first
-(:func:`envs.sim.climber.candidate_holes`). Actions the robot's own gait
+(:func:`kinegym.envs.sim.climber.candidate_holes`). Actions the robot's own gait
 model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``
 (a stepped masked action is not an error: it fails as ``unreachable`` and costs a move).
 
@@ -47,7 +47,7 @@ gait policy needs to break cycles; see the README's training section).
 
 With ``hints=True`` ``6 K + 1`` entries follow (142 in all for K = 8 with ``memory``): the
 map's lower bound on the moves left from the believed stance
-(:func:`envs.sim.climber.stance_hops`: hops of the held holes to the goal through holes one
+(:func:`kinegym.envs.sim.climber.stance_hops`: hops of the held holes to the goal through holes one
 arm span apart) as ``min(h, 20) / 10``; per action ``j K + k`` how the move changes that
 bound, clipped to [-2, 2] and halved; per action whether that move already failed from this
 stance this episode (1) or not (0). The robot knows the map, so these are its own
@@ -69,7 +69,7 @@ holes, sizes from ``wall_kwargs``, all from the env's seeded generator; or a fix
 ``configs/walls``), the robot is put on a resting stance among the lowest holes, and the
 goal is a hole in the top row. Walls are accepted only if the ``route_finder`` finds a route
 through the actions the agent is offered (``gymnasium.make`` gives the env the gait planner,
-:func:`agents.gait_planner.find_route`); ``info["planner_moves"]`` says how many moves it needed.
+:func:`kinegym.agents.gait_planner.find_route`); ``info["planner_moves"]`` says how many moves it needed.
 
 ## Episode End
 
@@ -104,7 +104,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.sim.climber import (
+from kinegym.envs.sim.climber import (
     OUTCOMES,
     ClimberModel,
     KinematicClimber,
@@ -116,7 +116,7 @@ from envs.sim.climber import (
     stance_hops,
     start_stances,
 )
-from kinematics.localization import AmbiguousFixError, Fix, HoleMap, Localizer, NoFixError, NoiseModel
+from kinegym.kinematics.localization import AmbiguousFixError, Fix, HoleMap, Localizer, NoFixError, NoiseModel
 
 __all__ = ["HoleClimbEnv", "WALL_DEFAULTS", "RouteFinder"]
 
@@ -471,7 +471,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             return None
         if self.holes is None:
             raise RuntimeError("call reset() before render()")
-        from envs.draw import draw_climb
+        from kinegym.envs.draw import draw_climb
 
         frame = draw_climb(self.holes, self.goal, self.sim.pose, self.sim.q, self.model.geom, self._est_pose(),
                            [h for h in self.cand if h >= 0], self.mask, self.K,
@@ -479,7 +479,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
-            from envs.viewer import Window
+            from kinegym.envs.viewer import Window
 
             self._window = Window("kinegym HoleClimb-v0", self.metadata["render_fps"])
         self._window.show(frame)

@@ -4,13 +4,13 @@ the field and its marks, a camera reads the board, an opponent draws by hand.
 ## Description
 
 The agent is the arm's player. Each step it picks a cell; the arm draws its mark there
-(in pymunk with ``draw_physics=True``, the default - :class:`envs.sim.arm.ArmSim`; as ideal
+(in pymunk with ``draw_physics=True``, the default - :class:`kinegym.envs.sim.arm.ArmSim`; as ideal
 strokes with ``draw_physics=False``, for speed). Then the opponent inside the env
 (``opponent``: the strong player, the thesis player, random, or any callable
-``Board -> cell``) draws its own mark by hand (:func:`envs.sim.board.hand_x` /
+``Board -> cell``) draws its own mark by hand (:func:`kinegym.envs.sim.board.hand_x` /
 :func:`~envs.sim.board.hand_o`: size, slant, wobble and placement vary), a camera
-photographs the board (:class:`envs.sim.camera.Camera`, preset ``camera``) and the board
-reader (:class:`vision.board_reader.BoardReader`) reads every cell as empty, X or O.
+photographs the board (:class:`kinegym.envs.sim.camera.Camera`, preset ``camera``) and the board
+reader (:class:`kinegym.vision.board_reader.BoardReader`) reads every cell as empty, X or O.
 
 A reading is accepted only if it is **consistent** with the last accepted board: every
 mark seen before is still there, the arm's new mark is where it drew it, and exactly as
@@ -76,7 +76,7 @@ synthetic hand mark for it.
 ``gymnasium.make("kinegym/TicTacToeDraw-v0", board=5, k=None, agent_symbol="X",
 opponent="thesis", draw_physics=True, draw_field=True, erase=True, obs_mode="board",
 camera="default", max_read_tries=3, arm="thesis_rrrr", homing=False, render_mode=None)``.
-The registered id gives the env the players of :mod:`agents.minimax` (``"strong"`` is
+The registered id gives the env the players of :mod:`kinegym.agents.minimax` (``"strong"`` is
 :class:`~agents.minimax.StrongPlayer` with its budget counted in search nodes, so seeded
 games replay bit for bit).
 
@@ -94,7 +94,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from envs.game import EMPTY, Board, Game, O, X
+from kinegym.envs.game import EMPTY, Board, Game, O, X
 
 __all__ = ["TicTacToeDrawEnv", "random_opponent", "OpponentFactory"]
 
@@ -159,8 +159,8 @@ class TicTacToeDrawEnv(gym.Env):
         image_space = spaces.Box(0, 255, (h, w, 3), np.uint8)
         self.observation_space = {"board": board_space, "image": image_space,
                                   "both": spaces.Dict({"board": board_space, "image": image_space})}[obs_mode]
-        from envs.sim.arm import ArmSim  # pymunk: only once an env is made
-        from vision.board_reader import BoardReader
+        from kinegym.envs.sim.arm import ArmSim  # pymunk: only once an env is made
+        from kinegym.vision.board_reader import BoardReader
 
         self.sim = ArmSim(arm, homing=False)
         self.homing = bool(homing)
@@ -195,7 +195,7 @@ class TicTacToeDrawEnv(gym.Env):
                 self.sim.canvas.stroke(st.points, self.sim.pen)
 
     def _arm_mark(self, cell: int) -> None:
-        from envs.sim import strokes as S
+        from kinegym.envs.sim import strokes as S
 
         r, c = divmod(cell, self.n)
         st = S.x_strokes(self.layout, r, c) if self.agent == X else S.o_strokes(self.layout, r, c)
@@ -203,8 +203,8 @@ class TicTacToeDrawEnv(gym.Env):
         self._arm_draw(st)
 
     def _hand_mark(self, cell: int) -> None:
-        from envs.sim.board import PENS
-        from envs.sim.scenes import draw_mark
+        from kinegym.envs.sim.board import PENS
+        from kinegym.envs.sim.scenes import draw_mark
 
         r, c = divmod(cell, self.n)
         centre = self.layout.cell_centre(r, c)
@@ -236,8 +236,8 @@ class TicTacToeDrawEnv(gym.Env):
 
     def _read(self, arm_cells: list[int], opp_new: int) -> None:
         """Photograph and read until consistent (or out of tries); updates the belief."""
-        from envs.sim.camera import Camera
-        from vision.errors import VisionError
+        from kinegym.envs.sim.camera import Camera
+        from kinegym.vision.errors import VisionError
 
         self._status.append("reading the board")
         aim = self.layout.field_centre
@@ -306,7 +306,7 @@ class TicTacToeDrawEnv(gym.Env):
             self._history = [("reset", self.np_random_seed)]
         else:
             self._history.append(("reset", None))
-        from envs.sim.board import BoardCanvas
+        from kinegym.envs.sim.board import BoardCanvas
 
         w, h = self.sim.layout.canvas_size
         self.sim.canvas = BoardCanvas(w, h, self.sim.canvas.px_per_cm)
@@ -319,7 +319,7 @@ class TicTacToeDrawEnv(gym.Env):
         self._pending_arm, self._pending_opp = [], 0
         self._status, self._done = [], False
         if self.draw_field:
-            from envs.sim import strokes as S
+            from kinegym.envs.sim import strokes as S
 
             self._status.append("the manipulator is drawing the playing field")
             self._arm_draw(S.field_strokes(self.layout))
@@ -349,7 +349,7 @@ class TicTacToeDrawEnv(gym.Env):
         w = self.true_board.winner
         self._status.append("game over: " + ("draw" if w == EMPTY else f"{_NAME[w]} wins"))
         if self.erase:
-            from envs.sim import strokes as S
+            from kinegym.envs.sim import strokes as S
 
             self._status.append("the manipulator is erasing the board")
             self._arm_draw(S.erase_strokes(self.layout, self.sim.spec))
@@ -396,7 +396,7 @@ class TicTacToeDrawEnv(gym.Env):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
-            from envs.viewer import Window
+            from kinegym.envs.viewer import Window
 
             self._window = Window("kinegym TicTacToeDraw-v0", self.metadata["render_fps"])
         self._window.show(frame)

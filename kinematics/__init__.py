@@ -1,11 +1,11 @@
 """Analytic and numeric kinematics of the kinegym robots (pure numpy, no physics engine).
 
-* :mod:`kinematics.climber` - three-armed climber: FK, closed-form IK, seed 000's inverse program;
-* :mod:`kinematics.localization` - hole maps of walls;
-* :mod:`kinematics.chains` - Denavit-Hartenberg and product-of-exponentials chains, Jacobians;
-* :mod:`kinematics.ik` - numeric IK (CCD, Levenberg-Marquardt DLS) with one result type;
-* :mod:`kinematics.writing_arm` - the 4-DOF writing arm: FK, every closed-form IK branch;
-* :mod:`kinematics.errors` - the named exceptions.
+* :mod:`kinegym.kinematics.climber` - three-armed climber: FK, closed-form IK, seed 000's inverse program;
+* :mod:`kinegym.kinematics.localization` - hole maps of walls;
+* :mod:`kinegym.kinematics.chains` - Denavit-Hartenberg and product-of-exponentials chains, Jacobians;
+* :mod:`kinegym.kinematics.ik` - numeric IK (CCD, Levenberg-Marquardt DLS) with one result type;
+* :mod:`kinegym.kinematics.writing_arm` - the 4-DOF writing arm: FK, every closed-form IK branch;
+* :mod:`kinegym.kinematics.errors` - the named exceptions.
 
 Lengths in cm, angles in radians.
 """

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-import configs as _configs
+import kinegym.configs as _configs
 
 from .errors import InvalidInputError, UnreachableError, as_array
 
@@ -51,7 +51,7 @@ _ARM_SCHEMA = {
     "shoulder_offset_cm": _configs.Vector(length=2, default=[0.0, 0.0]),
 }
 
-#: The robot's masses, servos, grippers and encoders (used by :mod:`envs.sim.climber`; the
+#: The robot's masses, servos, grippers and encoders (used by :mod:`kinegym.envs.sim.climber`; the
 #: kinematics only validates them, so one YAML file describes the whole robot).
 CLIMBER_PHYSICS_SCHEMA: dict[str, _configs.Spec] = {
     "body_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.6),

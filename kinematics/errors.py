@@ -24,7 +24,7 @@ __all__ = [
 
 
 class KinematicsError(Exception):
-    """Base class of every error raised by :mod:`kinematics`."""
+    """Base class of every error raised by :mod:`kinegym.kinematics`."""
 
 
 class InvalidInputError(KinematicsError, ValueError):

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-import configs as _configs
+import kinegym.configs as _configs
 
 from .climber import ClimberGeometry, hand_positions, inverse_program
 from .errors import InvalidInputError, KinematicsError, as_array

@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-import configs as _configs
+import kinegym.configs as _configs
 
 from .chains import DHChain, DHLink, PoEChain
 from .errors import InvalidInputError, JointLimitError, UnreachableError, as_array
@@ -98,7 +98,7 @@ _JOINT_SIM_SCHEMA: dict[str, _configs.Spec] = {
 }
 
 #: The ``sim:`` section of an arm YAML: servo loops, encoders, pen, sponge, board placement
-#: and drawing speeds (used by :mod:`envs.sim.arm`; validated here so that one file
+#: and drawing speeds (used by :mod:`kinegym.envs.sim.arm`; validated here so that one file
 #: describes the arm). Lengths cm, angles deg, masses kg, torques N cm, speeds cm/s.
 ARM_SIM_SCHEMA: dict[str, _configs.Spec] = {
     "control_hz": _N(lo=100.0, hi=10000.0, default=1000.0, doc="servo loop and physics rate (Hz)"),

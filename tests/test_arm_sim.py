@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 import yaml
 
-from envs.sim import strokes as S
-from envs.sim.arm import ArmSim, HomingError, step_metrics
-from kinematics.errors import UnreachableError
+from kinegym.envs.sim import strokes as S
+from kinegym.envs.sim.arm import ArmSim, HomingError, step_metrics
+from kinegym.kinematics.errors import UnreachableError
 
 INK_TOL_CM = 0.15  # ink lies within 1.5 mm of the planned stroke (plus half the pen width)
 

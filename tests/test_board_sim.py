@@ -4,9 +4,9 @@ homography says where the board is."""
 import numpy as np
 import pytest
 
-from envs.sim.board import PENS, BoardCanvas, Pen, field_segments, hand_o, hand_x
-from envs.sim.camera import PRESETS, Camera, CameraSpec
-from envs.sim.scenes import random_scene
+from kinegym.envs.sim.board import PENS, BoardCanvas, Pen, field_segments, hand_o, hand_x
+from kinegym.envs.sim.camera import PRESETS, Camera, CameraSpec
+from kinegym.envs.sim.scenes import random_scene
 
 
 def test_strokes_leave_ink_where_they_go_and_only_there() -> None:

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from kinematics import DHChain, DHLink, InvalidInputError, PoEChain, WritingArm
-from kinematics.chains import dh_matrix, screw_exp
+from kinegym.kinematics import DHChain, DHLink, InvalidInputError, PoEChain, WritingArm
+from kinegym.kinematics.chains import dh_matrix, screw_exp
 
 D = math.radians
 

@@ -161,7 +161,7 @@ def test_read_board_reads_a_photo_and_refuses_a_blank(tmp_path: Path, capsys: py
     import cv2
     import numpy as np
 
-    from envs.sim.scenes import random_scene
+    from kinegym.envs.sim.scenes import random_scene
 
     sc = random_scene(5, difficulty="hard")
     img = tmp_path / "board.jpg"

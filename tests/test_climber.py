@@ -7,15 +7,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from kinematics import ClimberGeometry, InvalidInputError, UnreachableError, arm_ik
-from kinematics.climber import (
+from kinegym.kinematics import ClimberGeometry, InvalidInputError, UnreachableError, arm_ik
+from kinegym.kinematics.climber import (
     body_to_wall,
     elbow_positions,
     hand_positions,
     inverse_program,
     wall_to_body,
 )
-from kinematics.localization import HoleMap
+from kinegym.kinematics.localization import HoleMap
 
 
 def test_seed_inverse_example_reproduces_printed_angles() -> None:

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from agents.gait_planner import GaitPlanner, start_stances
-from envs.sim import climber as C
-from envs.sim.climber import OUTCOMES, ClimberModel, KinematicClimber, MovePlan, PhysicsClimber, plan_move
-from kinematics import HoleMap
-from kinematics.climber import body_to_wall, hand_positions
+from kinegym.agents.gait_planner import GaitPlanner, start_stances
+from kinegym.envs.sim import climber as C
+from kinegym.envs.sim.climber import OUTCOMES, ClimberModel, KinematicClimber, MovePlan, PhysicsClimber, plan_move
+from kinegym.kinematics import HoleMap
+from kinegym.kinematics.climber import body_to_wall, hand_positions
 
 MODEL = ClimberModel.from_config("climber")
 WALL = HoleMap.grid(8, 8, 15.0, 0.5, seed=2)

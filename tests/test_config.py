@@ -4,9 +4,9 @@ from pathlib import Path
 
 import pytest
 
-import configs
-from configs import ConfigError
-from kinematics import ClimberGeometry, HoleMap, WritingArm
+from kinegym import configs
+from kinegym.configs import ConfigError
+from kinegym.kinematics import ClimberGeometry, HoleMap, WritingArm
 
 
 @pytest.mark.parametrize("kind", ["arms", "robots", "walls"])

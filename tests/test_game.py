@@ -2,7 +2,18 @@
 
 import pytest
 
-from envs.game import CLASSIC, EMPTY, THESIS, Board, Game, GameError, IllegalMoveError, InvalidPositionError, O, X
+from kinegym.envs.game import (
+    CLASSIC,
+    EMPTY,
+    THESIS,
+    Board,
+    Game,
+    GameError,
+    IllegalMoveError,
+    InvalidPositionError,
+    O,
+    X,
+)
 
 
 def test_line_counts_of_the_presets() -> None:

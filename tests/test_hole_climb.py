@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import kinegym  # noqa: F401  (registers the ids)
-from agents.gait_planner import PlannerAgent
-from envs.hole_climb import HoleClimbEnv
+from kinegym.agents.gait_planner import PlannerAgent
+from kinegym.envs.hole_climb import HoleClimbEnv
 
 ENV_ID = "kinegym/HoleClimb-v0"
 
@@ -215,8 +215,8 @@ def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
     """hints: the map's lower bound on the moves left is admissible (the planner's shortest
     route is never shorter), each feasible move changes it by -1..1, and a move that failed
     from a stance is flagged there."""
-    from agents.gait_planner import GaitPlanner
-    from envs.sim.climber import stance_hops
+    from kinegym.agents.gait_planner import GaitPlanner
+    from kinegym.envs.sim.climber import stance_hops
 
     env = gym.make(ENV_ID, memory=True, hints=True)
     u = env.unwrapped

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from kinematics import DHChain, DHLink, IKResult, InvalidInputError, WritingArm, ccd, dls, solve_arm
-from kinematics.ik import ArmSeeds
+from kinegym.kinematics import DHChain, DHLink, IKResult, InvalidInputError, WritingArm, ccd, dls, solve_arm
+from kinegym.kinematics.ik import ArmSeeds
 
 PINCHER = WritingArm.from_config("pincher")
 SEEDS = ArmSeeds(PINCHER)

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from kinematics import ClimberGeometry, HoleMap, InvalidInputError
-from kinematics.climber import body_to_wall, hand_positions, inverse_program
-from kinematics.localization import (
+from kinegym.kinematics import ClimberGeometry, HoleMap, InvalidInputError
+from kinegym.kinematics.climber import body_to_wall, hand_positions, inverse_program
+from kinegym.kinematics.localization import (
     AmbiguousFixError,
     BayesLocalizer,
     GripSimulator,
@@ -106,7 +106,7 @@ def test_dense_wall_ambiguity_is_proven_from_the_grip_cell(block: int, monkeypat
     """On a dense jittered wall a grip's own index cell holds many congruent triples; the
     probe screens it a block at a time and proves the ambiguity with two exact passes, which
     must be among the triples the full search finds passing."""
-    import kinematics.localization as loc_mod
+    import kinegym.kinematics.localization as loc_mod
 
     monkeypatch.setattr(loc_mod, "_PROBE_BLOCK", block)
     wall = HoleMap.grid(30, 30, spacing=20, jitter=0.5, seed=4)
@@ -222,8 +222,8 @@ def test_scalar_fit_matches_the_vectorised_fit(sigma_deg: float, monkeypatch: py
     (global search), both run to convergence, reach the same weighted optimum; the default
     (at most two Newton steps, stopping at a step under 0.01 rad) is within 1e-3 of its
     chi-square."""
-    from kinematics import localization
-    from kinematics.localization import _fit, _fit_one
+    from kinegym.kinematics import localization
+    from kinegym.kinematics.localization import _fit, _fit_one
 
     monkeypatch.setattr(localization, "_GN_STEPS", 8)
 

@@ -4,12 +4,13 @@ player against a naive re-implementation of the seed's rule, the opening book re
 import math
 import random
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from agents import book
-from agents.minimax import (
+from kinegym.agents import book
+from kinegym.agents.minimax import (
     RandomPlayer,
     Solver,
     StrongPlayer,
@@ -19,7 +20,7 @@ from agents.minimax import (
     play_match,
     tables,
 )
-from envs.game import CLASSIC, EMPTY, THESIS, Board, Game, O, X
+from kinegym.envs.game import CLASSIC, EMPTY, THESIS, Board, Game, O, X
 
 SMALL = [CLASSIC, Game(4, 4, 3), Game(4, 4, 4), Game(3, 4, 3)]
 
@@ -210,12 +211,33 @@ def test_heuristic_fallback_when_the_budget_is_tiny() -> None:
     assert player.last.source == "heuristic" and not player.last.exact
 
 
+def test_a_missing_shipped_book_is_a_loud_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """A wheel without the 5x5 book must not quietly play on at a minute a move."""
+    from kinegym.cli import main
+
+    monkeypatch.setattr(book, "BOOK_DIR", tmp_path)
+    book.load.cache_clear()
+    try:
+        with pytest.raises(book.MissingBookError, match="book_5x5x4.npz"):
+            book.load(THESIS)
+        with pytest.raises(book.MissingBookError):
+            StrongPlayer(seed=0).choose(THESIS.empty())
+        assert main(["solve", ".....|.....|.....|.....|....."]) == 1
+        assert "reinstall kinegym" in capsys.readouterr().err
+        assert book.load(CLASSIC) is None  # 3x3 has no book and needs none
+    finally:
+        monkeypatch.undo()
+        book.load.cache_clear()
+    assert book.load(THESIS) is not None
+
+
 def test_book_is_consistent_and_its_deepest_entries_resolve() -> None:
     """Every entry with fewer stones than the book's depth must equal the negamax of its
     children's entries (a check of all of them without any search); a sample of the
     deepest entries is re-solved from scratch."""
     got = book.load(THESIS)
-    assert got is not None, "the shipped 5x5x4 book is missing: python -m agents.book"
+    assert got is not None, "the shipped 5x5x4 book is missing: python -m kinegym.agents.book"
     values, max_stones = got
     levels = book.positions(THESIS, max_stones)
     assert sum(len(lv) for lv in levels) == len(values)
@@ -235,8 +257,8 @@ def test_book_is_consistent_and_its_deepest_entries_resolve() -> None:
 def test_deterministic_strong_player_repeats_itself_under_any_load() -> None:
     """Budgets counted in nodes: a seeded player makes the same moves, however slow the
     machine (a tiny budget forces the timed-out path, which wall time would make random)."""
-    from agents.minimax import RandomPlayer, StrongPlayer
-    from envs.game import THESIS
+    from kinegym.agents.minimax import RandomPlayer, StrongPlayer
+    from kinegym.envs.game import THESIS
 
     sources: set[str] = set()
 
@@ -261,7 +283,7 @@ def test_win_probe_out_of_time_still_proves_a_move_that_keeps_a_draw() -> None:
     """Off the book, the player first asks "can I force a win?" with half its budget; out of
     time it plays a move it proves keeps at least a draw (value a lower bound, exact False).
     The move is checked against the exact value of the position after it."""
-    from agents.minimax import RandomPlayer
+    from kinegym.agents.minimax import RandomPlayer
 
     checked = 0
     for seed in range(12):

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from agents import train as T
-from configs import ConfigError
+from kinegym.agents import train as T
+from kinegym.configs import ConfigError
 
 SMALL = {"n_envs": 2, "n_timesteps": 1024, "n_steps": 64, "batch_size": 64, "n_epochs": 2,
          "eval_freq": 256, "eval_episodes": 2, "checkpoint_freq": 256, "policy_kwargs": {"net_arch": [32, 32]}}

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from envs.game import CLASSIC, THESIS
-from envs.sim.board import PENS, BoardCanvas, hand_line
-from envs.sim.camera import Camera
-from envs.sim.scenes import random_scene
-from vision.board_reader import BoardReader, NoBoardError, ThresholdReader, VisionError, debug_image
+from kinegym.envs.game import CLASSIC, THESIS
+from kinegym.envs.sim.board import PENS, BoardCanvas, hand_line
+from kinegym.envs.sim.camera import Camera
+from kinegym.envs.sim.scenes import random_scene
+from kinegym.vision.board_reader import BoardReader, NoBoardError, ThresholdReader, VisionError, debug_image
 
 
 def read_many(seeds: range, n: int, difficulty: str, distractors: bool = False,

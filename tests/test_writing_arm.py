@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from kinematics import InvalidInputError, JointLimitError, UnreachableError, WritingArm
-from kinematics.writing_arm import BRANCHES
+from kinegym.kinematics import InvalidInputError, JointLimitError, UnreachableError, WritingArm
+from kinegym.kinematics.writing_arm import BRANCHES
 
 ARMS = {name: WritingArm.from_config(name) for name in ("pincher", "thesis_rrrr")}
 

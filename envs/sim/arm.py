@@ -57,9 +57,9 @@ from typing import Any
 import numpy as np
 import pymunk
 
-import configs as _configs
-from kinematics.errors import UnreachableError
-from kinematics.writing_arm import ARM_SCHEMA, WritingArm
+import kinegym.configs as _configs
+from kinegym.kinematics.errors import UnreachableError
+from kinegym.kinematics.writing_arm import ARM_SCHEMA, WritingArm
 
 from .board import BoardCanvas, Pen
 from .strokes import (

@@ -51,9 +51,9 @@ from pathlib import Path
 
 import numpy as np
 
-import configs as _configs
-from kinematics.climber import CLIMBER_SCHEMA, ClimberGeometry
-from kinematics.localization import HoleMap
+import kinegym.configs as _configs
+from kinegym.kinematics.climber import CLIMBER_SCHEMA, ClimberGeometry
+from kinegym.kinematics.localization import HoleMap
 
 __all__ = [
     "OUTCOMES",

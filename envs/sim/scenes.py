@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from envs.game import EMPTY, Board, Game, X
+from kinegym.envs.game import EMPTY, Board, Game, X
 
 from .board import (
     PAPERS,

@@ -2,7 +2,7 @@
 their timing at a speed limit.
 
 Everything here is geometry on the board, with no physics: strokes are polylines in
-*canvas* cm (the :class:`envs.sim.board.BoardCanvas` frame: x right, y up, origin at the
+*canvas* cm (the :class:`kinegym.envs.sim.board.BoardCanvas` frame: x right, y up, origin at the
 canvas's lower-left corner), and :func:`plan` turns a list of strokes into a
 :class:`Trajectory` of pen poses ``(x, y, z, phi)`` in the *arm* frame, sampled at the servo
 rate, with the pen lifted between strokes (seed 003, section 3.6.1):

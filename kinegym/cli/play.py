@@ -1,6 +1,6 @@
 """``kinegym play``: a person plays tic-tac-toe against the writing arm.
 
-The game runs in :class:`envs.tictactoe_draw.TicTacToeDrawEnv` with the person as the
+The game runs in :class:`kinegym.envs.tictactoe_draw.TicTacToeDrawEnv` with the person as the
 opponent: the arm draws the field, the person makes a mark, the camera photographs the
 board and the reader reads it like any other mark, the arm's player answers and the arm
 draws it; at the end the arm wipes the board. A status line shows the thesis GUI's
@@ -23,7 +23,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from kinegym.cli import EXIT_OK, UsageError, _emit
+from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit
 
 __all__ = ["add_parsers", "cmd_play", "TerminalPerson", "display_available"]
 
@@ -93,7 +93,7 @@ class WindowPerson:
         frame = env._frame()
         self.screen = pygame.display.set_mode(frame.shape[1::-1])
         pygame.display.set_caption("kinegym play - draw your mark, Enter when done")
-        from envs.sim.arm import view_box
+        from kinegym.envs.sim.arm import view_box
 
         self.box = view_box(env.sim)
 
@@ -116,7 +116,7 @@ class WindowPerson:
         return p - np.asarray(self.env.sim.layout.canvas_origin)
 
     def __call__(self, board: Any) -> int:
-        from envs.sim.board import PENS
+        from kinegym.envs.sim.board import PENS
 
         pg, env = self.pg, self.env
         lay, n = env.layout, env.n
@@ -157,9 +157,9 @@ class WindowPerson:
 
 
 def cmd_play(args: argparse.Namespace) -> int:
-    from agents.minimax import make_player
-    from envs.game import Board
-    from envs.tictactoe_draw import TicTacToeDrawEnv
+    from kinegym.agents.minimax import make_player
+    from kinegym.envs.game import Board
+    from kinegym.envs.tictactoe_draw import TicTacToeDrawEnv
     from kinegym.factories import strong_opponent, thesis_opponent
 
     if args.board not in (3, 5):
@@ -224,11 +224,11 @@ def cmd_play(args: argparse.Namespace) -> int:
         if gui:
             person.close()
     if args.json:
-        _emit(args, result, "")
+        emit(args, result, "")
     return EXIT_OK
 
 
-def add_parsers(sub: Any, common: Any) -> None:
+def add_parsers(sub: Any) -> None:
     pl = sub.add_parser("play", help="play tic-tac-toe against the writing arm (window, or terminal without one)")
     pl.add_argument("--board", type=int, default=5, help="3 or 5 cells a side (default 5, the thesis's game)")
     pl.add_argument("--k", type=int, default=None, help="in a row to win (default 4 on 5 x 5, 3 on 3 x 3)")
@@ -239,5 +239,5 @@ def add_parsers(sub: Any, common: Any) -> None:
     pl.add_argument("--terminal", action="store_true", help="type cells in the terminal even with a display")
     pl.add_argument("--fast", action="store_true", help="ideal strokes instead of the arm in pymunk")
     pl.add_argument("--no-erase", action="store_true", help="leave the board as it is at the end")
-    common(pl)
+    add_json(pl)
     pl.set_defaults(func=cmd_play)

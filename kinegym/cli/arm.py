@@ -2,7 +2,7 @@
 axis and the servo torques) and ``kinegym precision`` (stairs, parallel lines, a sine wave;
 static and dynamic error table in mm).
 
-Registered on the main parser by :func:`add_parsers`; conventions as in :mod:`kinegym.cli`.
+Registered on the main parser by :func:`add_parsers`; conventions in :mod:`kinegym.cli.common`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli import EXIT_OK, UsageError, _emit
+from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit
 
 __all__ = ["add_parsers", "cmd_draw", "cmd_precision", "shape_strokes"]
 
@@ -34,7 +34,7 @@ def _cell(text: str, n: int) -> tuple[int, int]:
 
 def shape_strokes(sim: Any, shape: str, size_cm: float | None, cell: tuple[int, int]) -> list[Any]:
     """The strokes of one ``kinegym draw`` shape on ``sim``'s board (size: see ``--size``)."""
-    from envs.sim import strokes as S
+    from kinegym.envs.sim import strokes as S
 
     lay = sim.layout
     if size_cm is not None and not size_cm > 0:
@@ -59,10 +59,9 @@ def shape_strokes(sim: Any, shape: str, size_cm: float | None, cell: tuple[int, 
 
 
 def cmd_draw(args: argparse.Namespace) -> int:
-    from envs.draw import save_rgb
-    from envs.sim.arm import ArmSim
-    from envs.sim.precision import axes_chart, torque_chart
-    from kinegym.cli_climb import save_gif
+    from kinegym.envs.draw import save_gif, save_rgb
+    from kinegym.envs.sim.arm import ArmSim
+    from kinegym.envs.sim.precision import axes_chart, torque_chart
     from kinegym.progress import Progress
 
     sim = ArmSim(args.arm, seed=args.seed, homing=args.homing)
@@ -71,7 +70,7 @@ def cmd_draw(args: argparse.Namespace) -> int:
         raise UsageError(f"--speed {args.speed}; expected a level 0..{top} ({list(sim.spec.speed_levels)} cm/s)")
     strokes = shape_strokes(sim, args.shape, args.size, _cell(args.cell, sim.layout.n))
     if args.shape == "erase":  # something to wipe: the field and a few marks
-        from envs.sim import strokes as S
+        from kinegym.envs.sim import strokes as S
 
         sim.draw(S.field_strokes(sim.layout) + S.x_strokes(sim.layout, 1, 1) + S.o_strokes(sim.layout, 3, 2))
     frames: list[np.ndarray] = []
@@ -110,16 +109,16 @@ def cmd_draw(args: argparse.Namespace) -> int:
     if args.shape == "erase":
         lines.append(f"ink left on the board: max density {ink:.4f} (0 = clean)")
     lines += [f"{k}: {v}" for k, v in files.items()]
-    _emit(args, {"arm": sim.arm.name, "shape": args.shape, "speed_cm_s": speed, "simulated_s": rec.duration_s,
+    emit(args, {"arm": sim.arm.name, "shape": args.shape, "speed_cm_s": speed, "simulated_s": rec.duration_s,
                  "wall_s": wall, "errors_mm": err, "peak_torque_ratio": peak.tolist(), "ink_left": ink,
                  "files": files}, "\n".join(lines))
     return EXIT_OK
 
 
 def cmd_precision(args: argparse.Namespace) -> int:
-    from envs.draw import save_rgb
-    from envs.sim.arm import ArmSim
-    from envs.sim.precision import axes_chart, run_precision
+    from kinegym.envs.draw import save_rgb
+    from kinegym.envs.sim.arm import ArmSim
+    from kinegym.envs.sim.precision import axes_chart, run_precision
     from kinegym.progress import Progress
 
     axes = ("x", "y", "z") if args.axis == "all" else (args.axis,)
@@ -158,11 +157,11 @@ def cmd_precision(args: argparse.Namespace) -> int:
                      f"{f(r['dynamic_rms_mm']):>8} {f(r['dynamic_max_mm']):>8} {f(r['believed_static_rms_mm']):>15} "
                      f"{f(r['believed_dynamic_rms_mm']):>12}")
     lines += [f"plot: {p}" for p in files]
-    _emit(args, {"arm": probe.arm.name, "speed_cm_s": speed, "tests": rows, "files": files}, "\n".join(lines))
+    emit(args, {"arm": probe.arm.name, "speed_cm_s": speed, "tests": rows, "files": files}, "\n".join(lines))
     return EXIT_OK
 
 
-def add_parsers(sub: Any, common: Any) -> None:
+def add_parsers(sub: Any) -> None:
     dr = sub.add_parser("draw", help="the writing arm draws one shape; plots desired vs real and the torques")
     dr.add_argument("--shape", default="x", choices=SHAPES)
     dr.add_argument("--size", type=float, default=None,
@@ -174,7 +173,7 @@ def add_parsers(sub: Any, common: Any) -> None:
     dr.add_argument("--seed", type=int, default=0, help="seed of the power-on pose (with --homing)")
     dr.add_argument("--out", default="kinegym-out", help="folder for the PNGs")
     dr.add_argument("--gif", default=None, help="write a GIF of the drawing")
-    common(dr)
+    add_json(dr)
     dr.set_defaults(func=cmd_draw)
 
     pr = sub.add_parser("precision", help="stairs, parallel lines and a sine: static and dynamic error in mm")
@@ -182,5 +181,5 @@ def add_parsers(sub: Any, common: Any) -> None:
     pr.add_argument("--speed", type=float, default=2, help="speed level 0..5")
     pr.add_argument("--arm", default="thesis_rrrr", help="arm config name or YAML path")
     pr.add_argument("--out", default="kinegym-out", help="folder for the PNGs")
-    common(pr)
+    add_json(pr)
     pr.set_defaults(func=cmd_precision)

@@ -1,5 +1,5 @@
 """``kinegym train gait``, ``kinegym evaluate gait`` and ``kinegym tune gait`` (see
-:mod:`agents.train`). Registered on the main parser by :func:`add_parsers`."""
+:mod:`kinegym.agents.train`). Registered on the main parser by :func:`add_parsers`."""
 
 from __future__ import annotations
 
@@ -9,13 +9,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from kinegym.cli import EXIT_OK, UsageError, _emit
+from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit
 
 __all__ = ["add_parsers"]
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from agents import train as T
+    from kinegym.agents import train as T
 
     progress = not args.json and not args.no_progress
     if args.minutes is not None and not args.minutes > 0:
@@ -39,12 +39,12 @@ def cmd_train(args: argparse.Namespace) -> int:
         lines.append(f"learning curve: {curve}")
     lines.append(f"evaluate it: kinegym evaluate gait --policy {run / 'final_model.zip'}"
                  f"  (the best on validation walls: {run / 'best' / 'best_model.zip'})")
-    _emit(args, {"run": str(run), "files": files}, "\n".join(lines))
+    emit(args, {"run": str(run), "files": files}, "\n".join(lines))
     return EXIT_OK
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from agents import train as T
+    from kinegym.agents import train as T
     from kinegym.progress import Progress
 
     if not Path(args.policy).is_file():
@@ -66,24 +66,24 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         name = r.agent if len(r.agent) <= 40 else "..." + r.agent[-37:]
         lines.append(f"{name:<40} {r.mode:<10} {r.success:>8.1%} {r.falls:>6} {f(r.mean_moves, '.1f'):>7} "
                      f"{f(r.moves_vs_planner, '.2f') + 'x':>11} {r.decision_ms:>8.2f}")
-    _emit(args, {"walls": args.walls, "episodes": args.episodes, "rows": [r.as_dict() for r in rows]},
+    emit(args, {"walls": args.walls, "episodes": args.episodes, "rows": [r.as_dict() for r in rows]},
           "\n".join(lines))
     return EXIT_OK
 
 
 def cmd_tune(args: argparse.Namespace) -> int:
-    from agents import train as T
+    from kinegym.agents import train as T
 
     if args.trials < 1:
         raise UsageError(f"--trials {args.trials}; expected >= 1")
     res = T.tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed)
     lines = [f"study {res['study']} on {res['storage']}: {res['trials']} trials ({res['complete']} complete, "
              f"{res['pruned']} pruned)", f"best validation success {res['best_value']}, params {res['best_params']}"]
-    _emit(args, res, "\n".join(lines))
+    emit(args, res, "\n".join(lines))
     return EXIT_OK
 
 
-def add_parsers(sub: Any, common: Any) -> None:
+def add_parsers(sub: Any) -> None:
     tr = sub.add_parser("train", help="train a policy (MaskablePPO) for the climber's gait")
     tr.add_argument("what", choices=("gait",), help="what to learn (the climber's gait sequencing)")
     tr.add_argument("--config", default="hole_climb_maskable_ppo", help="configs/train name or YAML path")
@@ -95,7 +95,7 @@ def add_parsers(sub: Any, common: Any) -> None:
     tr.add_argument("--minutes", type=float, default=None,
                     help="stop after this much wall time (final model saved; default: no limit)")
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
-    common(tr)
+    add_json(tr)
     tr.set_defaults(func=cmd_train)
 
     ev = sub.add_parser("evaluate", help="a trained gait policy against the planner on held-out walls")
@@ -104,7 +104,7 @@ def add_parsers(sub: Any, common: Any) -> None:
     ev.add_argument("--episodes", type=int, default=50)
     ev.add_argument("--walls", default="held-out", choices=("held-out", "validation"))
     ev.add_argument("--mode", default="both", choices=("kinematic", "physics", "both"))
-    common(ev)
+    add_json(ev)
     ev.set_defaults(func=cmd_evaluate)
 
     tu = sub.add_parser("tune", help="hyper-parameter search on Optuna (many workers may share one storage)")
@@ -117,5 +117,5 @@ def add_parsers(sub: Any, common: Any) -> None:
     tu.add_argument("--config", default="hole_climb_maskable_ppo")
     tu.add_argument("--out", default="runs/tune")
     tu.add_argument("--seed", type=int, default=0)
-    common(tu)
+    add_json(tu)
     tu.set_defaults(func=cmd_tune)

@@ -1,6 +1,6 @@
 """Command-line tools for the tic-tac-toe brain and eyes: ``solve``, ``match``, ``read-board``.
 
-Registered on the main parser by :func:`add_parsers`; conventions as in :mod:`kinegym.cli`
+Registered on the main parser by :func:`add_parsers`; conventions in :mod:`kinegym.cli.common`
 (``--json``, exit codes 0 / 2 / 3).
 """
 
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli import EXIT_NO_ANSWER, EXIT_OK, UsageError, _emit
+from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit
 
 __all__ = ["add_parsers", "cmd_solve", "cmd_match", "cmd_read_board"]
 
@@ -21,20 +21,20 @@ _VALUE = {1: "win", 0: "draw", -1: "loss"}
 
 
 def _game(board: int, k: int | None) -> Any:
-    from envs.game import Game
+    from kinegym.envs.game import Game
 
     return Game(board, board, k if k is not None else (3 if board == 3 else 4))
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from agents.minimax import StrongPlayer
-    from envs.game import Board
+    from kinegym.agents.minimax import StrongPlayer
+    from kinegym.envs.game import Board
 
     b = Board.parse(args.board, k=args.k)
     g = b.game
     mover = "X" if b.to_move == 1 else "O"
     if b.is_over:
-        _emit(args, {"game": str(g), "board": str(b), "result": b.result(), "best_moves": []},
+        emit(args, {"game": str(g), "board": str(b), "result": b.result(), "best_moves": []},
               f"{g}: the game is over ({b.result()}); no move to make")
         return EXIT_NO_ANSWER
     player = StrongPlayer(seed=0, time_budget_s=None, book=not args.no_book)
@@ -46,13 +46,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
             f"{g}, {mover} to move: {_VALUE[a.value]} for {mover} with best play "
             f"({a.source}, {a.nodes} positions, {secs:.3f} s)",
             "best moves (row, col): " + ", ".join(f"({r}, {c})" for r, c in cells)]
-    _emit(args, {"game": str(g), "board": str(b), "to_move": mover, "value": a.value, "outcome": _VALUE[a.value],
+    emit(args, {"game": str(g), "board": str(b), "to_move": mover, "value": a.value, "outcome": _VALUE[a.value],
                  "best_moves": cells, "source": a.source, "nodes": a.nodes, "seconds": secs}, "\n".join(text))
     return EXIT_OK
 
 
 def cmd_match(args: argparse.Namespace) -> int:
-    from agents.minimax import PLAYERS, play_match
+    from kinegym.agents.minimax import PLAYERS, play_match
     from kinegym.progress import Progress
 
     for side, name in (("--x", args.x), ("--o", args.o)):
@@ -78,7 +78,7 @@ def cmd_match(args: argparse.Namespace) -> int:
              f"max {sx['max_s'] * 1e3:.0f} ms",
              f"  move time O: median {so['median_s'] * 1e3:.1f} ms, p95 {so['p95_s'] * 1e3:.1f} ms, "
              f"max {so['max_s'] * 1e3:.0f} ms"]
-    _emit(args, {"game": str(game), "x": args.x, "o": args.o, "games": res.games, "x_wins": res.x_wins,
+    emit(args, {"game": str(game), "x": args.x, "o": args.o, "games": res.games, "x_wins": res.x_wins,
                  "o_wins": res.o_wins, "draws": res.draws, "x_move_time": sx, "o_move_time": so,
                  "seconds": secs}, "\n".join(lines))
     return EXIT_OK
@@ -87,7 +87,7 @@ def cmd_match(args: argparse.Namespace) -> int:
 def cmd_read_board(args: argparse.Namespace) -> int:
     import cv2
 
-    from vision.board_reader import BoardReader, NoBoardError, debug_image
+    from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 
     path = Path(args.image)
     if not path.is_file():
@@ -104,7 +104,7 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     except NoBoardError as err:
         if args.debug:
             _save(debug_image(rgb, None, trace, str(err)), args.debug)
-        _emit(args, {"error": "NoBoardError", "message": str(err), "debug": args.debug},
+        emit(args, {"error": "NoBoardError", "message": str(err), "debug": args.debug},
               f"kinegym: {err}" + (f"\ndebug picture: {args.debug}" if args.debug else ""))
         return EXIT_NO_ANSWER
     ms = (time.perf_counter() - t0) * 1e3
@@ -117,7 +117,7 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     text.append(f"text form: {r.text()}")
     if args.debug:
         text.append(f"debug picture: {args.debug}")
-    _emit(args, {"size": r.n, "board": r.text(), "cells": r.cells.tolist(),
+    emit(args, {"size": r.n, "board": r.text(), "cells": r.cells.tolist(),
                  "confidence": np.round(r.confidence, 4).tolist(), "corners_px": np.round(r.corners(), 2).tolist(),
                  "grid_error_px": r.grid_error_px, "frame": list(r.frame), "ms": ms, "debug": args.debug},
           "\n".join(text))
@@ -125,18 +125,18 @@ def cmd_read_board(args: argparse.Namespace) -> int:
 
 
 def _save(rgb: np.ndarray, path: str) -> None:
-    from envs.draw import save_rgb
+    from kinegym.envs.draw import save_rgb
 
     save_rgb(rgb, path)
 
 
-def add_parsers(sub: Any, common: Any) -> None:
+def add_parsers(sub: Any) -> None:
     """Add ``solve``, ``match`` and ``read-board`` to the main parser's subcommands."""
     so = sub.add_parser("solve", help="game value and best moves of a tic-tac-toe position")
     so.add_argument("board", help='rows joined by |, e.g. "X..|.O.|..." (3x3) or 5 rows of 5 for 5x5')
     so.add_argument("--k", type=int, default=None, help="stones in a row to win (default 3 on 3x3, else 4)")
     so.add_argument("--no-book", action="store_true", help="search from scratch, without the opening book")
-    common(so)
+    add_json(so)
     so.set_defaults(func=cmd_solve)
 
     ma = sub.add_parser("match", help="play two players against each other and tally the results")
@@ -146,12 +146,12 @@ def add_parsers(sub: Any, common: Any) -> None:
     ma.add_argument("--board", type=int, default=5, choices=(3, 4, 5, 6), help="board size (default 5)")
     ma.add_argument("--k", type=int, default=None, help="stones in a row to win (default 3 on 3x3, else 4)")
     ma.add_argument("--seed", type=int, default=0, help="seed of the players' tie-breaking")
-    common(ma)
+    add_json(ma)
     ma.set_defaults(func=cmd_match)
 
     rb = sub.add_parser("read-board", help="read a tic-tac-toe board from a photo (X, O or empty per cell)")
     rb.add_argument("image", help="image file (PNG, JPEG, ...)")
     rb.add_argument("--size", type=int, choices=(3, 5), default=None, help="board size (default: decide)")
     rb.add_argument("--debug", default=None, help="write a PNG showing the found grid and each cell's call")
-    common(rb)
+    add_json(rb)
     rb.set_defaults(func=cmd_read_board)

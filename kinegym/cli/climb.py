@@ -1,7 +1,7 @@
 """``kinegym climb``: run HoleClimb-v0 episodes with the planner or a trained policy, print
 success, moves and falls, and write a GIF of the climb.
 
-Registered on the main parser by :func:`add_parsers`; conventions as in :mod:`kinegym.cli`.
+Registered on the main parser by :func:`add_parsers`; conventions in :mod:`kinegym.cli.common`.
 """
 
 from __future__ import annotations
@@ -13,38 +13,21 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli import EXIT_NO_ANSWER, EXIT_OK, UsageError, _emit
+from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit
 
-__all__ = ["add_parsers", "cmd_climb", "save_gif", "load_policy"]
-
-
-def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
-    """Write RGB frames as an animated GIF (Pillow), same-size frames padded if needed."""
-    from PIL import Image
-
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    h = max(f.shape[0] for f in frames)
-    w = max(f.shape[1] for f in frames)
-    imgs = []
-    for f in frames:
-        canvas = np.full((h, w, 3), 255, np.uint8)
-        canvas[: f.shape[0], : f.shape[1]] = f
-        imgs.append(Image.fromarray(canvas).convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
-    imgs[0].save(out, save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0, optimize=False)
-    return out
+__all__ = ["add_parsers", "cmd_climb", "load_policy"]
 
 
 def load_policy(spec: str) -> Any:
     """``"planner"`` or a MaskablePPO ``.zip``: an object with ``act(env) -> action``."""
-    from agents.gait_planner import PlannerAgent
+    from kinegym.agents.gait_planner import PlannerAgent
 
     if spec == "planner":
         return PlannerAgent()
     path = Path(spec)
     if not path.is_file():
         raise UsageError(f"--policy {spec!r} is neither 'planner' nor an existing model file (.zip)")
-    from agents.policies import MaskedPolicyAgent
+    from kinegym.agents.policies import MaskedPolicyAgent
 
     return MaskedPolicyAgent(path)
 
@@ -53,6 +36,7 @@ def cmd_climb(args: argparse.Namespace) -> int:
     import gymnasium as gym
 
     import kinegym  # noqa: F401  (registers the ids)
+    from kinegym.envs.draw import save_gif
     from kinegym.progress import Progress
 
     if args.episodes < 1:
@@ -60,14 +44,14 @@ def cmd_climb(args: argparse.Namespace) -> int:
     agent = load_policy(args.policy)
     kwargs: dict[str, Any] = {"mode": args.mode, "robot": args.robot, "wall": args.wall}
     if args.policy != "planner":  # the env as the policy was trained on it (e.g. memory=True)
-        from agents.train import policy_env_kwargs
+        from kinegym.agents.train import policy_env_kwargs
 
         kwargs = {**policy_env_kwargs(args.policy), **kwargs}
     try:
         env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array" if args.gif else None, **kwargs)
         env.reset(seed=args.seed)
     except RuntimeError as err:  # no route on a fixed wall for this robot
-        _emit(args, {"error": "NoRoute", "message": str(err)}, f"kinegym: {err}")
+        emit(args, {"error": "NoRoute", "message": str(err)}, f"kinegym: {err}")
         return EXIT_NO_ANSWER
     rows, frames = [], []
     t0 = time.perf_counter()
@@ -107,12 +91,12 @@ def cmd_climb(args: argparse.Namespace) -> int:
     lines.append(f"success {ok}/{len(rows)}" + (f", mean moves {np.mean(moves):.1f}" if moves else ""))
     if gif:
         lines.append(f"gif: {gif}")
-    _emit(args, {"policy": args.policy, "mode": args.mode, "episodes": rows, "success_rate": ok / len(rows),
+    emit(args, {"policy": args.policy, "mode": args.mode, "episodes": rows, "success_rate": ok / len(rows),
                  "gif": gif, "seconds": secs}, "\n".join(lines))
     return EXIT_OK
 
 
-def add_parsers(sub: Any, common: Any) -> None:
+def add_parsers(sub: Any) -> None:
     cl = sub.add_parser("climb", help="run HoleClimb-v0 episodes with the planner or a trained policy")
     cl.add_argument("--wall", default="generated",
                     help="'generated' (a new seeded wall per episode), a wall config name or a YAML path")
@@ -122,5 +106,5 @@ def add_parsers(sub: Any, common: Any) -> None:
     cl.add_argument("--episodes", type=int, default=5)
     cl.add_argument("--seed", type=int, default=0, help="seed of the first episode (then +1 per episode)")
     cl.add_argument("--gif", default=None, help="write a GIF of the first episode")
-    common(cl)
+    add_json(cl)
     cl.set_defaults(func=cmd_climb)

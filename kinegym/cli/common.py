@@ -1,0 +1,79 @@
+"""What every ``kinegym`` command shares: exit codes, the one-line usage error, parsing of
+number lists, and the ``--json`` / text output switch.
+
+Conventions (user-facing contract): degrees at the command line, cm for lengths; ``--json``
+prints one machine-readable object; exit code 0 = done, 2 = bad input (one line naming the
+value), 3 = a well-formed question with no answer (unreachable target, ...), still valid
+JSON with ``--json``; 1 = a broken install (a file that ships with kinegym is missing).
+This module imports only the standard library and numpy, so every command module can
+import it without pulling in the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any, NoReturn
+
+import numpy as np
+
+__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_NO_ANSWER", "EXIT_BROKEN_INSTALL", "UsageError", "Parser",
+           "parse_floats", "parse_triples", "emit", "rnd", "add_json"]
+
+EXIT_OK, EXIT_BROKEN_INSTALL, EXIT_USAGE, EXIT_NO_ANSWER = 0, 1, 2, 3
+
+
+class UsageError(ValueError):
+    """Bad command-line input; the message names the option and the value."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An argparse parser whose errors are one :class:`UsageError` line, no usage dump."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(f"{self.prog}: {message}")
+
+
+def parse_floats(text: str, n: int, option: str) -> list[float]:
+    """``"1,2,3"`` -> ``[1.0, 2.0, 3.0]`` with exactly ``n`` finite numbers."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        vals = []
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        shape = ",".join("N" * 1 for _ in range(n))
+        raise UsageError(f"{option} {text!r} is not {n} finite numbers like {shape}")
+    return vals
+
+
+def parse_triples(text: str, option: str, width: int = 2) -> np.ndarray:
+    """``"a,b;c,d;e,f"`` -> a (3, width) array (one group per arm)."""
+    groups = [g for g in text.split(";")]
+    if len(groups) != 3:
+        example = ";".join([",".join(["N"] * width)] * 3)
+        raise UsageError(f"{option} {text!r} is not 3 groups like {example!r}")
+    return np.array([parse_floats(g, width, option) for g in groups])
+
+
+def emit(args: argparse.Namespace, obj: dict[str, Any], text: str) -> None:
+    """Print ``obj`` as one JSON object with ``--json``, else the human-readable ``text``."""
+    if getattr(args, "json", False):
+        print(json.dumps(obj))
+    else:
+        print(text)
+
+
+def rnd(x: Any, nd: int = 6) -> Any:
+    """Round floats and arrays (as lists) for JSON output; anything else unchanged."""
+    if isinstance(x, np.ndarray):
+        return np.round(x, nd).tolist()
+    if isinstance(x, float):
+        return round(x, nd)
+    return x
+
+
+def add_json(sp: argparse.ArgumentParser) -> None:
+    """The ``--json`` switch every command has."""
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
