@@ -2,7 +2,7 @@
 planner, and tune hyper-parameters on Optuna.
 
 One readable script in the CleanRL spirit, behind ``kinegym train gait``, ``kinegym
-evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym.agents.train ...``):
+evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait ...``):
 
 * **Configuration**, RL-Zoo style: ``configs/train/hole_climb_maskable_ppo.yaml`` holds one
   section per env id (``n_envs``, ``n_timesteps``, ``policy``, ``policy_kwargs``,
@@ -29,6 +29,11 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym.agents.train
   callback); any number of processes or machines pointing at the same ``--storage``
   (``sqlite:///file.db``, ``postgresql://...``, or ``journal:PATH`` for a journal file on a
   shared disk) cooperate on one study.
+* **Environments** come from a factory, ``make_env(**env_kwargs) -> gymnasium.Env``, that
+  every function takes (default :func:`make_env`: ``gymnasium.make(ENV_ID, ...)``, the id
+  the ``kinegym`` package registers when any ``kinegym.*`` module is imported). Pass your
+  own to train on a wrapped or modified env; it must be a module-level function when
+  ``n_envs > 1`` (the worker processes unpickle it).
 """
 
 from __future__ import annotations
@@ -61,13 +66,23 @@ __all__ = [
     "tune",
     "EvalRow",
     "policy_env_kwargs",
-    "main",
+    "make_env",
+    "EnvFactory",
 ]
 
 ENV_ID = "kinegym/HoleClimb-v0"
 HELD_OUT_SEED = 1_000_000  # evaluate: wall i is reset(seed=HELD_OUT_SEED + i)
 VALIDATION_SEED = 2_000_000  # the evaluation callback's wall stream
 DEFAULT_CONFIG = "hole_climb_maskable_ppo"
+#: ``make_env(**env_kwargs)`` -> a HoleClimb env (see the module docstring)
+EnvFactory = Callable[..., Any]
+
+
+def make_env(**env_kwargs: Any) -> Any:
+    """``gymnasium.make(ENV_ID, **env_kwargs)``: the registered HoleClimb-v0 with its time limit."""
+    import gymnasium as gym
+
+    return gym.make(ENV_ID, **env_kwargs)
 
 
 @dataclass(frozen=True)
@@ -149,14 +164,12 @@ _POOL_KEYS = ("wall_pool", "wall_pool_seed")
 
 
 def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | None, subproc: bool,
-              pool_seed: int | None = None) -> Any:
+              make: EnvFactory, pool_seed: int | None = None) -> Any:
     """``n_envs`` training envs; with ``pool_seed`` None (evaluation) on fresh walls every
     reset, whatever ``wall_pool`` the config gives, else with the config's wall pool made
     from ``pool_seed`` (the run's seed) unless it names its own ``wall_pool_seed``."""
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
-
-    import kinegym  # noqa: F401  (registers the ids)
 
     kwargs: dict[str, Any] = {}
     if subproc and n_envs > 1:
@@ -169,7 +182,7 @@ def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | N
             env_kwargs.pop(key, None)
     elif env_kwargs.get("wall_pool"):
         env_kwargs.setdefault("wall_pool_seed", int(pool_seed))
-    return make_vec_env(f"kinegym:{ENV_ID}", n_envs=n_envs, seed=seed, env_kwargs=env_kwargs,
+    return make_vec_env(make, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs,
                         monitor_dir=str(monitor_dir) if monitor_dir else None,
                         monitor_kwargs={"info_keywords": ("is_success",)}, **kwargs)
 
@@ -211,11 +224,11 @@ def _time_limit(minutes: float | None) -> list[Any]:
     return [TimeLimit()]
 
 
-def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, extra: Sequence[Any] = ()) -> list[Any]:
+def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, make: EnvFactory, extra: Sequence[Any] = ()) -> list[Any]:
     from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
     from stable_baselines3.common.callbacks import CheckpointCallback
 
-    eval_env = _make_vec(cfg, 1, VALIDATION_SEED, None, subproc=False)
+    eval_env = _make_vec(cfg, 1, VALIDATION_SEED, None, subproc=False, make=make)
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -239,7 +252,8 @@ def _set_threads(n: int) -> None:
 
 def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, seed: int = 0, n_envs: int | None = None,
           out: str | Path = "runs", progress: bool = True, overrides: dict[str, Any] | None = None,
-          trial_callback: Any = None, command: Sequence[str] | None = None, minutes: float | None = None) -> Path:
+          trial_callback: Any = None, command: Sequence[str] | None = None, minutes: float | None = None,
+          make_env: EnvFactory = make_env) -> Path:
     """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring).
     ``minutes`` stops training after that much wall time (the final model is saved)."""
     from sb3_contrib import MaskablePPO
@@ -259,7 +273,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     run = _new_run_dir(Path(out), f"gait-seed{seed}")
     (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
     (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
-    env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True, pool_seed=seed)
+    env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True, make=make_env, pool_seed=seed)
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -267,7 +281,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     try:
         model = MaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"), device="cpu",
                             **_model_kwargs(cfg))
-        cbs = _callbacks(cfg, run, cfg["n_envs"], [trial_callback] if trial_callback else []) + limit
+        cbs = _callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
         model.save(run / "final_model.zip")
         if cfg["normalize"]:
@@ -292,7 +306,8 @@ def _last_checkpoint(run: Path) -> tuple[Path, int]:
 
 
 def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = True,
-           command: Sequence[str] | None = None, minutes: float | None = None) -> Path:
+           command: Sequence[str] | None = None, minutes: float | None = None,
+           make_env: EnvFactory = make_env) -> Path:
     """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
     statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
     (default: the run's ``n_timesteps``)."""
@@ -318,7 +333,8 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
     (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed, "resumed_from": str(ck),
                                                      "resumed_steps": steps}, sort_keys=False))
     (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
-    env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True, pool_seed=seed)
+    env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True, make=make_env,
+                    pool_seed=seed)
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -328,7 +344,7 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
         env = VecNormalize.load(str(stats), env)
     try:
         model = MaskablePPO.load(ck, env=env, device="cpu", tensorboard_log=str(run / "tb"))
-        cbs = _callbacks(cfg, run, cfg["n_envs"]) + limit
+        cbs = _callbacks(cfg, run, cfg["n_envs"], make_env) + limit
         model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
                     reset_num_timesteps=False, tb_log_name="run")
         model.save(run / "final_model.zip")
@@ -437,12 +453,9 @@ class EvalRow:
 
 
 def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("kinematic",), walls: str = "held-out",
-             progress: Callable[[], None] | None = None) -> list[EvalRow]:
+             progress: Callable[[], None] | None = None, make_env: EnvFactory = make_env) -> list[EvalRow]:
     """The policy and the planner, deterministically, on the same walls: ``held-out`` (wall
     ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``."""
-    import gymnasium as gym
-
-    import kinegym  # noqa: F401
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.policies import MaskedPolicyAgent
 
@@ -453,7 +466,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
     rows = []
     env_kwargs = policy_env_kwargs(policy)
     for mode in modes:
-        env = gym.make(ENV_ID, **{**env_kwargs, "mode": mode})
+        env = make_env(**{**env_kwargs, "mode": mode})
         if env.observation_space.shape != pol.model.observation_space.shape:
             raise ValueError(f"{policy}: the model sees observations of shape {pol.model.observation_space.shape}, "
                              f"the env {env.observation_space.shape} with env_kwargs {env_kwargs} (no run config.yaml "
@@ -507,7 +520,8 @@ def _storage(url: str) -> Any:
 
 
 def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config: str | Path = DEFAULT_CONFIG,
-         out: str | Path = "runs/tune", seed: int = 0, progress: bool = False) -> dict[str, Any]:
+         out: str | Path = "runs/tune", seed: int = 0, progress: bool = False,
+         make_env: EnvFactory = make_env) -> dict[str, Any]:
     """Run ``trials`` Optuna trials of the study ``study`` in ``storage`` (created if missing);
     several processes or machines may run this at once on one storage. Returns a summary."""
     import optuna
@@ -545,7 +559,7 @@ def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config:
         cb = Report(trial)
         run = train(config, timesteps, seed + trial.number, out=out, progress=progress,
                     overrides={**over, "eval_freq": max(64, timesteps // 4)}, trial_callback=cb,
-                    command=["kinegym", "tune", "gait", f"trial {trial.number} of study {study}"])
+                    command=["kinegym", "tune", "gait", f"trial {trial.number} of study {study}"], make_env=make_env)
         trial.set_user_attr("run", str(run))
         if cb.pruned:
             raise optuna.TrialPruned()
@@ -559,18 +573,3 @@ def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config:
     return {"study": study, "storage": storage, "trials": len(s.trials), "complete": len(done),
             "pruned": sum(t.state == optuna.trial.TrialState.PRUNED for t in s.trials),
             "best_value": None if best is None else best.value, "best_params": None if best is None else best.params}
-
-
-# ------------------------------------------------------------------ command line
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m kinegym.agents.train {train,evaluate,tune} ...`` - the same as ``kinegym ... gait``."""
-    from kinegym.cli import main as cli_main
-
-    args = list(sys.argv[1:] if argv is None else argv)
-    if args and args[0] in ("train", "evaluate", "tune"):
-        args = [args[0], "gait", *args[1:]]
-    return cli_main(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

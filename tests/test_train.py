@@ -87,7 +87,7 @@ def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:
 
     cfg = small_config(tmp_path, n_envs=1, eval_episodes=1)
     storage = f"journal:{tmp_path / 'study.log'}"
-    cmd = [sys.executable, "-m", "agents.train", "tune", "--trials", "1", "--storage", storage, "--study", "s",
+    cmd = [sys.executable, "-m", "kinegym", "tune", "gait", "--trials", "1", "--storage", storage, "--study", "s",
            "--timesteps", "256", "--config", str(cfg), "--out", str(tmp_path / "tune"), "--json"]
     procs = [subprocess.Popen([*cmd, "--seed", str(10 * i)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                               text=True, cwd=Path(T.__file__).parents[1]) for i in range(2)]
