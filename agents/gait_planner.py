@@ -32,7 +32,7 @@ from kinegym.envs.sim.climber import (
     stance_hops,
     start_stances,
 )
-from kinegym.kinematics.localization import HoleMap
+from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
 

@@ -28,7 +28,7 @@ import numpy as np
 
 import kinegym  # noqa: F401
 from kinegym.envs.sim.climber import ClimberModel, KinematicClimber, candidate_holes, start_stances
-from kinegym.kinematics.localization import HoleMap
+from kinegym.kinematics.holes import HoleMap
 
 
 def env_rate(env: gym.Env, seconds: float, masked: bool) -> tuple[float, int]:

@@ -22,16 +22,11 @@ import timeit
 import numpy as np
 
 from kinegym.kinematics import ClimberGeometry, HoleMap
-from kinegym.kinematics.localization import (
-    AmbiguousFixError,
-    GripSimulator,
-    Localizer,
-    NoFixError,
-    NoiseModel,
-    TriangleIndex,
-    seed_adjacent_search,
-    sensor_study,
-)
+from kinegym.kinematics.localization import Localizer
+from kinegym.kinematics.pose_fit import AmbiguousFixError, NoFixError, NoiseModel
+from kinegym.kinematics.seed_search import seed_adjacent_search
+from kinegym.kinematics.sensor_study import GripSimulator, sensor_study
+from kinegym.kinematics.triangles import TriangleIndex
 
 
 def main() -> None:

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from kinegym.kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
-from kinegym.kinematics.localization import HoleMap
+from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb",
     "save_gif", "ARM_COLOURS"]

@@ -116,7 +116,9 @@ from kinegym.envs.sim.climber import (
     stance_hops,
     start_stances,
 )
-from kinegym.kinematics.localization import AmbiguousFixError, Fix, HoleMap, Localizer, NoFixError, NoiseModel
+from kinegym.kinematics.holes import HoleMap
+from kinegym.kinematics.localization import Localizer
+from kinegym.kinematics.pose_fit import AmbiguousFixError, Fix, NoFixError, NoiseModel
 
 __all__ = ["HoleClimbEnv", "WALL_DEFAULTS", "RouteFinder"]
 

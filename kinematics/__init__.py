@@ -1,7 +1,12 @@
 """Analytic and numeric kinematics of the kinegym robots (pure numpy, no physics engine).
 
 * :mod:`kinegym.kinematics.climber` - three-armed climber: FK, closed-form IK, seed 000's inverse program;
-* :mod:`kinegym.kinematics.localization` - hole maps of walls;
+* :mod:`kinegym.kinematics.holes` - hole maps of walls (ids, positions, a spatial hash);
+* :mod:`kinegym.kinematics.localization` - which holes the climber holds and where it is
+  (:mod:`~kinegym.kinematics.pose_fit` fits and gates, :mod:`~kinegym.kinematics.triangles`
+  the triangle index, :mod:`~kinegym.kinematics.bayes` lost starts,
+  :mod:`~kinegym.kinematics.seed_search` the seed's own search as a baseline,
+  :mod:`~kinegym.kinematics.sensor_study` simulated grips and the sensor study);
 * :mod:`kinegym.kinematics.chains` - Denavit-Hartenberg and product-of-exponentials chains, Jacobians;
 * :mod:`kinegym.kinematics.ik` - numeric IK (CCD, Levenberg-Marquardt DLS) with one result type;
 * :mod:`kinegym.kinematics.writing_arm` - the 4-DOF writing arm: FK, every closed-form IK branch;
@@ -18,8 +23,8 @@ from .errors import (
     KinematicsError,
     UnreachableError,
 )
+from .holes import HoleMap
 from .ik import IKResult, ccd, dls, solve_arm
-from .localization import HoleMap
 from .writing_arm import WritingArm
 
 __all__ = [

@@ -15,7 +15,7 @@ from kinegym.kinematics.climber import (
     inverse_program,
     wall_to_body,
 )
-from kinegym.kinematics.localization import HoleMap
+from kinegym.kinematics.holes import HoleMap
 
 
 def test_seed_inverse_example_reproduces_printed_angles() -> None:

@@ -6,20 +6,13 @@ import numpy as np
 import pytest
 
 from kinegym.kinematics import ClimberGeometry, HoleMap, InvalidInputError
+from kinegym.kinematics.bayes import BayesLocalizer
 from kinegym.kinematics.climber import body_to_wall, hand_positions, inverse_program
-from kinegym.kinematics.localization import (
-    AmbiguousFixError,
-    BayesLocalizer,
-    GripSimulator,
-    Localizer,
-    NoFixError,
-    NoiseModel,
-    TriangleIndex,
-    chi2_3_cdf,
-    chi2_3_quantile,
-    seed_adjacent_search,
-    sensor_study,
-)
+from kinegym.kinematics.localization import Localizer
+from kinegym.kinematics.pose_fit import AmbiguousFixError, NoFixError, NoiseModel, chi2_3_cdf, chi2_3_quantile
+from kinegym.kinematics.seed_search import seed_adjacent_search
+from kinegym.kinematics.sensor_study import GripSimulator, sensor_study
+from kinegym.kinematics.triangles import TriangleIndex
 
 GEOM = ClimberGeometry()
 SEED_ANGLES = np.radians([[-24, 85], [78, 55], [-155, 103]])
@@ -115,7 +108,7 @@ def test_dense_wall_ambiguity_is_proven_from_the_grip_cell(block: int, monkeypat
     proven = 0
     for _ in range(20):
         grip = sim.grip()
-        hx, hy, cov, w = loc._measure(grip.q_measured)
+        hx, hy, cov, w = loc.measure(grip.q_measured)
         verdict = loc._probe_cell(hx, hy, cov, w)
         if verdict is None:
             continue
@@ -222,10 +215,10 @@ def test_scalar_fit_matches_the_vectorised_fit(sigma_deg: float, monkeypatch: py
     (global search), both run to convergence, reach the same weighted optimum; the default
     (at most two Newton steps, stopping at a step under 0.01 rad) is within 1e-3 of its
     chi-square."""
-    from kinegym.kinematics import localization
-    from kinegym.kinematics.localization import _fit, _fit_one
+    from kinegym.kinematics import pose_fit
+    from kinegym.kinematics.pose_fit import _fit, _fit_one
 
-    monkeypatch.setattr(localization, "_GN_STEPS", 8)
+    monkeypatch.setattr(pose_fit, "_GN_STEPS", 8)
 
     wall = HoleMap.grid(12, 12, spacing=20, jitter=0.5, seed=5)
     loc = Localizer(wall, GEOM, NoiseModel(sigma_angle=math.radians(sigma_deg), sigma_map=0.01))
@@ -233,7 +226,7 @@ def test_scalar_fit_matches_the_vectorised_fit(sigma_deg: float, monkeypatch: py
     xy = wall.xy
     for k in range(200):
         g = sim.grip()
-        hx, hy, cov, w = loc._measure(g.q_measured)
+        hx, hy, cov, w = loc.measure(g.q_measured)
         v = list(g.holes)
         if k % 2:  # a neighbouring, wrong triple: a poor fit, but both must agree on it
             v[k % 3] = int(wall.within(xy[v[k % 3]], 25.0)[0])

@@ -53,7 +53,7 @@ import numpy as np
 
 import kinegym.configs as _configs
 from kinegym.kinematics.climber import CLIMBER_SCHEMA, ClimberGeometry
-from kinegym.kinematics.localization import HoleMap
+from kinegym.kinematics.holes import HoleMap
 
 __all__ = [
     "OUTCOMES",

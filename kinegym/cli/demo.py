@@ -30,7 +30,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         hand_positions,
         inverse_program,
     )
-    from kinegym.kinematics.localization import HoleMap
+    from kinegym.kinematics.holes import HoleMap
     from kinegym.kinematics.writing_arm import WritingArm
 
     out = Path(args.out)
@@ -61,7 +61,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     files.append(str(png))
 
     # 3. localisation of seed 000's example angles on its wall
-    from kinegym.kinematics.localization import AmbiguousFixError, Localizer, NoiseModel
+    from kinegym.kinematics.localization import Localizer
+    from kinegym.kinematics.pose_fit import AmbiguousFixError, NoiseModel
 
     angles = np.radians([[-24, 85], [78, 55], [-155, 103]])
     fix = Localizer(wall, geom, NoiseModel(tolerance=0.15)).localize(angles)

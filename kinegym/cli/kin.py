@@ -121,7 +121,7 @@ def cmd_fk_arm(args: argparse.Namespace) -> int:
 
 def _wall(spec: str, args: argparse.Namespace) -> Any:
     """A wall from a config name/path, or ``grid:COLSxROWS`` generated with --spacing/--jitter/--seed."""
-    from kinegym.kinematics.localization import HoleMap
+    from kinegym.kinematics.holes import HoleMap
 
     if spec.startswith("grid:"):
         try:
@@ -133,7 +133,7 @@ def _wall(spec: str, args: argparse.Namespace) -> Any:
 
 
 def _noise(args: argparse.Namespace, geom: Any) -> Any:
-    from kinegym.kinematics.localization import NoiseModel
+    from kinegym.kinematics.pose_fit import NoiseModel
 
     if args.tolerance is not None:
         if not (math.isfinite(args.tolerance) and args.tolerance > 0):
@@ -148,7 +148,8 @@ def _noise(args: argparse.Namespace, geom: Any) -> Any:
 
 
 def cmd_localize(args: argparse.Namespace) -> int:
-    from kinegym.kinematics.localization import AmbiguousFixError, Localizer, NoFixError
+    from kinegym.kinematics.localization import Localizer
+    from kinegym.kinematics.pose_fit import AmbiguousFixError, NoFixError
 
     q = np.radians(parse_triples(args.angles, "--angles"))
     geom = climber_geometry(args)
@@ -204,7 +205,7 @@ def _plot_localisation(path: str, wall: Any, q: np.ndarray, geom: Any, cands: Se
 
 def cmd_sensor_study(args: argparse.Namespace) -> int:
     from kinegym.envs.draw import line_chart, save_rgb
-    from kinegym.kinematics.localization import sensor_study
+    from kinegym.kinematics.sensor_study import sensor_study
     from kinegym.progress import Progress
 
     sigmas = [float(v) for v in parse_floats(args.sigmas, len(args.sigmas.split(",")), "--sigmas")]
