@@ -1,7 +1,11 @@
 """Reading a tic-tac-toe board from a camera image with OpenCV and numpy.
 
-:mod:`kinegym.vision.board_reader` holds :class:`~vision.board_reader.BoardReader` (finds the grid
-in every frame, undoes the perspective, calls each cell empty / X / O with a confidence)
-and the seed's baseline :class:`~vision.board_reader.ThresholdReader`. Importing
-``vision`` itself loads nothing heavy.
+:mod:`kinegym.vision.board_reader` holds :class:`~kinegym.vision.board_reader.BoardReader`
+(finds the grid in every frame, undoes the perspective, calls each cell empty / X / O with a
+confidence), built from :mod:`~kinegym.vision.ink` (the ink map),
+:mod:`~kinegym.vision.grid_lines` (the grid's straight lines) and :mod:`~kinegym.vision.cells`
+(cell features and their classification); :mod:`~kinegym.vision.reading` is the result type,
+:mod:`~kinegym.vision.debug` draws what the reader did, and
+:mod:`~kinegym.vision.threshold_reader` keeps the seed's baseline reader. Importing
+``kinegym.vision`` itself loads nothing heavy.
 """

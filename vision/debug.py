@@ -1,0 +1,43 @@
+"""A picture of what the board reader did: lines, lattice crossings, the fitted field, each cell's call.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .ink import _apply, _as_rgb
+from .reading import _SYMBOL, BoardReading
+
+__all__ = ["debug_image"]
+
+
+def debug_image(image: object, reading: BoardReading | None, trace: dict[str, object],
+                error: str | None = None) -> np.ndarray:
+    """An RGB picture of what the reader did: the straight lines it found (columns red,
+    rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
+    each cell's call with its confidence - or, without a board, the reason in red."""
+    img = _as_rgb(image).copy()
+    k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
+    for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
+        for ln in trace.get(key, []):  # type: ignore[union-attr]
+            cv2.line(img, tuple(np.rint(ln.p0 * k).astype(int)), tuple(np.rint(ln.p1 * k).astype(int)), colour, 2,
+                     cv2.LINE_AA)
+    if "lattice" in trace and "nodes" in trace:
+        for p in _apply(trace["lattice"], trace["nodes"].astype(float)) * k:  # type: ignore[union-attr, arg-type]
+            cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
+    if reading is not None:
+        n, H = reading.n, reading.homography
+        for i in range(n + 1):
+            for a, b in (((i, 0), (i, n)), ((0, i), (n, i))):
+                p = np.rint(_apply(H, np.array([a, b], float))).astype(int)
+                cv2.line(img, tuple(p[0]), tuple(p[1]), (0, 200, 0), 1, cv2.LINE_AA)
+        for r in range(n):
+            for c in range(n):
+                p = np.rint(_apply(H, np.array([[c + 0.5, r + 0.5]]))).astype(int)[0]
+                label = f"{_SYMBOL[int(reading.cells[r, c])]}{reading.confidence[r, c]:.2f}"
+                cv2.putText(img, label, (p[0] - 16, p[1] + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.38, (0, 120, 0), 1,
+                            cv2.LINE_AA)
+    if error:
+        cv2.putText(img, error[:90], (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0), 1, cv2.LINE_AA)
+    return img
