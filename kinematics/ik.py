@@ -17,25 +17,29 @@
   arm that leaves the joint limits), the table's other branches are tried before the
   random restarts.
 
-The LM core is plain Python: for the 4 x 4 systems of the arms it is many times faster
-than numpy's per-call overhead. :func:`dls` runs small systems (up to 6 x 6) on generated
-straight-line code; :func:`solve_arm` runs one generated function per arm and mask with
-the residual, Jacobian and damped solve fused and the constants folded (~1 us per LM
-iteration; a call takes ~6 us for position and ~9 us for position + pitch targets).
+The readable LM is :func:`_lm_reference` (numpy, a dozen lines per step). What runs is
+faster and fenced off in :mod:`kinegym.kinematics._kernels`: :func:`dls` takes the
+plain-Python kernel (small systems on generated straight-line code; for the 4 x 4 systems
+of the arms many times faster than numpy's per-call overhead), :func:`solve_arm` one
+generated function per arm and mask with the residual, Jacobian and damped solve fused
+(~1 us per LM iteration; a call takes ~6 us for position and ~9 us for position + pitch
+targets). ``tests/test_kernels.py`` pins each kernel to the reference.
 """
 
 from __future__ import annotations
 
 import math
-from array import array
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from ._kernels.arm_lm import arm_kernel
+from ._kernels.lm import Residual, lm_attempt
+from .arm_seeds import ArmSeeds
 from .chains import DHChain
 from .errors import InvalidInputError, as_array
-from .writing_arm import TWO_PI, WritingArm
+from .writing_arm import WritingArm
 
 __all__ = ["IKResult", "ccd", "dls", "solve_arm", "ArmSeeds", "MASKS"]
 
@@ -44,9 +48,6 @@ MASKS: dict[str, tuple[bool, bool, bool, bool]] = {
     "position": (True, True, True, False),
     "position+pitch": (True, True, True, True),
 }
-
-Residual = Callable[[list[float]], tuple[list[float], list[list[float]]]]
-
 
 @dataclass(frozen=True)
 class IKResult:
@@ -79,108 +80,6 @@ def _limits(limits: object | None, n: int) -> list[tuple[float, float]]:
             f"limits={lim.tolist()}; expected {n} rows of [low <= high] (one per joint)"
         )
     return [(float(a), float(b)) for a, b in lim]
-
-
-def _solve_spd(a: list[list[float]], b: list[float]) -> list[float]:
-    """Solve a small symmetric positive-definite system by Cholesky (plain Python)."""
-    n = len(b)
-    low = [[0.0] * n for _ in range(n)]
-    for i in range(n):
-        ai, li = a[i], low[i]
-        for j in range(i + 1):
-            lj = low[j]
-            s = ai[j]
-            for k in range(j):
-                s -= li[k] * lj[k]
-            if i == j:
-                li[i] = math.sqrt(s) if s > 0 else 1e-300
-            else:
-                li[j] = s / lj[j]
-    y = [0.0] * n
-    for i in range(n):
-        s = b[i]
-        li = low[i]
-        for k in range(i):
-            s -= li[k] * y[k]
-        y[i] = s / li[i]
-    x = [0.0] * n
-    for i in range(n - 1, -1, -1):
-        s = y[i]
-        for k in range(i + 1, n):
-            s -= low[k][i] * x[k]
-        x[i] = s / low[i][i]
-    return x
-
-
-# ---------------------------------------------------------------------------- LM / DLS
-# Straight-line kernels for small dense systems (generated once per size, like the DH
-# chains of chains.py): ``prep(e, jac)`` returns the gradient ``g = J^T e`` and the data of
-# the damped system; ``solve(data, dl)`` returns the step for the damping ``dl = lambda^2``.
-# For m >= n the system is the normal one, ``(J^T J + dl I) dq = J^T e`` (n x n); for m < n
-# it is the equivalent ``dq = J^T (J J^T + dl I)^-1 e`` (m x m, the push-through identity,
-# seed 003's form), which is smaller. Cholesky as in :func:`_solve_spd`.
-_DENSE_MAX = 6
-_dense_kernels: dict[tuple[int, int], tuple[Callable, Callable]] = {}
-
-
-def _chol_lines(k: int, a: Callable[[int, int], str], b: Callable[[int], str]) -> list[str]:
-    """Lines solving ``(A + dl I) x = b`` by Cholesky into ``x0..x{k-1}``."""
-    lines = []
-    for i in range(k):
-        for j in range(i + 1):
-            terms = "".join(f" - l{i}_{t}*l{j}_{t}" for t in range(j))
-            if i == j:
-                lines.append(f"s = {a(i, i)} + dl{terms}")
-                lines.append(f"l{i}_{i} = sqrt(s) if s > 0 else 1e-300")
-            else:
-                lines.append(f"l{i}_{j} = ({a(j, i)}{terms}) / l{j}_{j}")
-    for i in range(k):
-        terms = "".join(f" - l{i}_{t}*y{t}" for t in range(i))
-        lines.append(f"y{i} = ({b(i)}{terms}) / l{i}_{i}")
-    for i in range(k - 1, -1, -1):
-        terms = "".join(f" - l{t}_{i}*x{t}" for t in range(i + 1, k))
-        lines.append(f"x{i} = (y{i}{terms}) / l{i}_{i}")
-    return lines
-
-
-def _dense_kernel(m: int, n: int) -> tuple[Callable, Callable]:
-    kern = _dense_kernels.get((m, n))
-    if kern is not None:
-        return kern
-    unpack = [f"e{r}" for r in range(m)]
-    prep = [f"    {', '.join(unpack)}, = e"]
-    for r in range(m):
-        prep.append(f"    {', '.join(f'j{r}_{c}' for c in range(n))}, = jac[{r}]")
-    for c in range(n):
-        prep.append(f"    g{c} = " + " + ".join(f"j{r}_{c}*e{r}" for r in range(m)))
-    if m >= n:  # normal equations, n x n
-        k = n
-        ent = [(i, j) for i in range(k) for j in range(i, k)]
-        for i, j in ent:
-            prep.append(f"    a{i}_{j} = " + " + ".join(f"j{r}_{i}*j{r}_{j}" for r in range(m)))
-        data = [f"a{i}_{j}" for i, j in ent] + [f"g{c}" for c in range(n)]
-        rhs = [f"g{c}" for c in range(n)]
-        tail = [f"    return [{', '.join(f'x{c}' for c in range(n))}]"]
-    else:  # J J^T form, m x m
-        k = m
-        ent = [(i, j) for i in range(k) for j in range(i, k)]
-        for i, j in ent:
-            prep.append(f"    a{i}_{j} = " + " + ".join(f"j{i}_{c}*j{j}_{c}" for c in range(n)))
-        flat_j = [f"j{r}_{c}" for r in range(m) for c in range(n)]
-        data = [f"a{i}_{j}" for i, j in ent] + unpack + flat_j
-        rhs = unpack
-        cols = (" + ".join(f"j{r}_{c}*x{r}" for r in range(m)) for c in range(n))
-        tail = [f"    return [{', '.join(cols)}]"]
-    prep.append(f"    return [{', '.join(f'g{c}' for c in range(n))}], ({', '.join(data)},)")
-    solve = [f"    {', '.join(data)}, = data"]
-    solve += ["    " + ln for ln in _chol_lines(k, lambda i, j: f"a{i}_{j}", lambda i: rhs[i])]
-    src = ("def prep(e, jac):\n" + "\n".join(prep) + "\n\n"
-           "def solve(data, dl):\n" + "\n".join(solve + tail) + "\n")
-    ns: dict[str, object] = {"sqrt": math.sqrt}
-    exec(compile(src, f"<dls {m}x{n}>", "exec"), ns)  # noqa: S102 - generated above
-    kern = (ns["prep"], ns["solve"])  # type: ignore[assignment]
-    _dense_kernels[(m, n)] = kern  # type: ignore[assignment]
-    return kern  # type: ignore[return-value]
 
 
 def _restart_loop(
@@ -232,94 +131,54 @@ def _restart_loop(
                     "stalled" if stalled_any else "max_iterations", restarts)
 
 
-def _lm_attempt(
+def _lm_reference(
     residual: Residual, lim: list[tuple[float, float]], lam: float, tol: float, max_iter: int
 ) -> Callable[[list[float]], tuple[list[float], float, int, bool]]:
-    """One LM descent from a start (the generic path of :func:`dls`)."""
-    n = len(lim)
-    tol2 = tol * tol
-    los = [lo for lo, _ in lim]
-    his = [hi for _, hi in lim]
+    """One Levenberg-Marquardt descent from a start, in numpy: the readable reference of :func:`dls`.
 
-    def attempt(q: list[float]) -> tuple[list[float], float, int, bool]:
-        e, jac = residual(q)
-        err2 = 0.0
-        for v in e:
-            err2 += v * v
-        m = len(e)
-        kern = _dense_kernel(m, n) if m <= _DENSE_MAX and n <= _DENSE_MAX else None
-        damp = lam
-        stall = 0
-        it = 0
-        atlim = any(v <= lo or v >= hi for v, lo, hi in zip(q, los, his, strict=False))
-        for _ in range(max_iter):
-            if err2 <= tol2:
-                break
-            it += 1
-            if kern is not None:
-                g, data = kern[0](e, jac)
-            else:
-                g = [sum(jac[r][c] * e[r] for r in range(m)) for c in range(n)]
-            # active set: a joint on a limit whose descent direction leaves the box is frozen
-            if atlim:
-                free = [
-                    c for c in range(n)
-                    if not ((q[c] <= los[c] and g[c] < 0) or (q[c] >= his[c] and g[c] > 0))
-                ]
-                if not free:
-                    return q, err2, it, True
-                if len(free) == n:
-                    free = None
-            else:
-                free = None
-            if free is None and kern is not None:
-                solve = kern[1]
-            else:
-                solve = None
-                fr = free if free is not None else list(range(n))
-                normal = [[sum(jac[r][i] * jac[r][j] for r in range(m)) for j in fr] for i in fr]
-                gf = [g[c] for c in fr]
-            improved = False
+    Each iteration takes the damped Gauss-Newton step ``(J^T J + lambda^2 I) dq = J^T e``
+    over the free joints (a joint resting on a limit is frozen while the gradient pushes it
+    outward), clamps into the limits and keeps the step only if the error drops: then the
+    damping falls tenfold (not below ``lam``), else it grows tenfold and the step is retried.
+    It stops converged (``|e| <= tol``), stalled (no damping helps, or five steps in a row
+    gain under 1e-9 relative) or after ``max_iter``. :mod:`kinegym.kinematics._kernels.lm`
+    runs the same steps in plain Python, faster.
+    """
+    lo, hi = np.array([a for a, _ in lim]), np.array([b for _, b in lim])
+
+    def attempt(q0: list[float]) -> tuple[list[float], float, int, bool]:
+        q = np.array(q0, float)
+        e, jac = (np.asarray(v, float) for v in residual(list(q0)))
+        err2, damp, stall, it = float(e @ e), lam, 0, 0
+        at_limit = bool(np.any((q <= lo) | (q >= hi)))
+        for it in range(1, max_iter + 1):
+            if err2 <= tol * tol:
+                return list(q), err2, it - 1, False
+            g = jac.T @ e
+            free = ~(((q <= lo) & (g < 0)) | ((q >= hi) & (g > 0))) if at_limit else np.ones(len(q), bool)
+            if not free.any():
+                return list(q), err2, it, True
+            jf = jac[:, free]
             while damp < 1e9:
-                dl = damp * damp
-                if solve is not None:
-                    step = solve(data, dl)
-                    qn = [q[c] + step[c] for c in range(n)]
-                else:
-                    a = [row[:] for row in normal]
-                    for i in range(len(fr)):
-                        a[i][i] += dl
-                    step = _solve_spd(a, gf)
-                    qn = list(q)
-                    for i, c in enumerate(fr):
-                        qn[c] += step[i]
-                nlim = False
-                for c in range(n):
-                    v = qn[c]
-                    if v <= los[c]:
-                        qn[c] = los[c]
-                        nlim = True
-                    elif v >= his[c]:
-                        qn[c] = his[c]
-                        nlim = True
-                en, jn = residual(qn)
-                errn = 0.0
-                for v in en:
-                    errn += v * v
+                qn = q.copy()
+                qn[free] += np.linalg.solve(jf.T @ jf + damp * damp * np.eye(len(g[free])), g[free])
+                new_limit = bool(np.any((qn <= lo) | (qn >= hi)))
+                qn = np.clip(qn, lo, hi)
+                en, jn = (np.asarray(v, float) for v in residual(list(qn)))
+                errn = float(en @ en)
                 if errn < err2:
-                    rel = (err2 - errn) / err2
-                    q, e, jac, err2, atlim = qn, en, jn, errn, nlim
+                    stall = stall + 1 if (err2 - errn) / err2 < 1e-9 else 0
+                    q, e, jac, err2, at_limit = qn, en, jn, errn, new_limit
                     damp = max(damp * 0.1, lam)
-                    improved = True
-                    stall = stall + 1 if rel < 1e-9 else 0
                     break
                 damp *= 10.0
-            if not improved or stall >= 5:
-                return q, err2, it, True
-        return q, err2, it, False
+            else:
+                return list(q), err2, it, True
+            if stall >= 5:
+                return list(q), err2, it, True
+        return list(q), err2, it, False
 
     return attempt
-
 
 def dls(
     residual: Residual,
@@ -330,6 +189,7 @@ def dls(
     max_iter: int = 100,
     restarts: int = 10,
     rng: np.random.Generator | None = None,
+    fast: bool = True,
 ) -> IKResult:
     """Levenberg-Marquardt damped least squares on a residual function.
 
@@ -345,511 +205,18 @@ def dls(
             a stall or ``max_iter``.
         rng: generator for the restarts (reproducible); default ``np.random.default_rng(0)``.
 
-    Systems up to 6 x 6 run on generated straight-line code (see :func:`_dense_kernel`).
+        fast: run the plain-Python kernel (:mod:`kinegym.kinematics._kernels.lm`, systems up
+            to 6 x 6 on generated straight-line code); False runs the numpy reference
+            :func:`_lm_reference` (the same steps, slower).
     """
     n = len(q0)
     lim = _limits(limits, n)
     q = [min(max(float(v), lo), hi) for v, (lo, hi) in zip(q0, lim, strict=False)]
-    return _restart_loop(_lm_attempt(residual, lim, lam, tol, max_iter), q, lim, tol, restarts, rng)
+    descent = lm_attempt if fast else _lm_reference
+    return _restart_loop(descent(residual, lim, lam, tol, max_iter), q, lim, tol, restarts, rng)
 
 
 # ---------------------------------------------------------------------------- writing arm
-def _arm_kernel_source(arm: WritingArm, pitch: bool) -> str:
-    """Source of the fused LM descent of :func:`solve_arm` for one arm and mask.
-
-    The same algorithm as :func:`dls` (damping, active set, stall rule), with the arm's
-    analytic Jacobian folded in. The task error is taken in the frame of the arm's current
-    heading, ``u = (cos yaw, sin yaw)``, ``t = (-sin yaw, cos yaw)`` (a rotation of the x, y
-    rows: ``J^T J``, ``J^T e`` and hence every LM step are unchanged). There the Jacobian is
-    sparse::
-
-        t row: [r,  0,   0,   0 ]        r  = A cos psiA + B cos psiB + T cos psiT
-        u row: [lf, -S2, -S3, -S4]       S2 = A sin psiA + S3, S3 = B sin psiB + S4, S4 = T sin psiT
-        z row: [0,  r,   z3,  ct]        z3 = B cos psiB + ct, ct = T cos psiT
-        phi  : [0,  1,   1,   1 ]        (position + pitch only)
-
-    and the damped step ``dq = J^T (J J^T + dl I)^-1 e`` needs a 2x2 (position) or 3x3
-    (position + pitch) solve after eliminating the t row. With a joint frozen by the active
-    set, the reduced normal equations are solved by :func:`_solve_spd` as in :func:`dls`.
-    """
-    A, B, T = float(arm.upper_arm), float(arm.forearm), float(arm.tool)
-    LF = float(arm.lateral_offset)
-    YO, PO = float(arm.yaw_offset), float(arm.pitch_offset)
-    lims = [tuple(map(float, r)) for r in arm.limits]
-
-    def plus(expr: str, c: float) -> str:
-        return expr if c == 0.0 else f"({expr} + {c!r})"
-
-    def evaluate(q: tuple[str, ...], o: str, ind: str) -> list[str]:
-        q1, q2, q3, q4 = q
-        lines = [
-            f"yw = {plus(q1, YO)}",
-            "c = cos(yw)",
-            "s = sin(yw)",
-            f"pa = {plus(q2, PO)}",
-            f"pb = pa + {q3}",
-            f"pt = pb + {q4}",
-            f"{o}ct = {T!r}*cos(pt)",
-            f"{o}S4 = {T!r}*sin(pt)",
-            f"{o}S3 = {B!r}*sin(pb) + {o}S4",
-            f"{o}S2 = {A!r}*sin(pa) + {o}S3",
-            f"{o}z3 = {B!r}*cos(pb) + {o}ct",
-            f"{o}r = {A!r}*cos(pa) + {o}z3",
-            f"{o}eu = X*c + Y*s - {o}r",
-            f"{o}et = {plus('Y*c - X*s', LF)}",
-            f"{o}ez = Z - {o}S2",
-        ]
-        if pitch:
-            lines += [
-                f"{o}ep = remainder(gp - ({q2} + {q3} + {q4}), {TWO_PI!r})",
-                f"{o}err2 = {o}eu*{o}eu + {o}et*{o}et + {o}ez*{o}ez + {o}ep*{o}ep",
-            ]
-        else:
-            lines.append(f"{o}err2 = {o}eu*{o}eu + {o}et*{o}et + {o}ez*{o}ez")
-        return [ind + ln for ln in lines]
-
-    state = ["r", "z3", "ct", "S2", "S3", "S4", "eu", "et", "ez"] + (["ep"] if pitch else [])
-    EP = " + ep" if pitch else ""
-    qs = ("q1", "q2", "q3", "q4")
-    ns = ("n1", "n2", "n3", "n4")
-    at_lim = " or ".join(f"{q} <= {lo!r} or {q} >= {hi!r}"
-                         for q, (lo, hi) in zip(qs, lims, strict=True))
-    L = [
-        "def attempt(q1, q2, q3, q4, gx, gy, gz, gp, lam, tol2, max_iter):",
-        f"    X = {plus('gx', -float(arm.base_xy[0]))}",
-        f"    Y = {plus('gy', -float(arm.base_xy[1]))}",
-        f"    Z = {plus('gz', -float(arm.shoulder_height))}",
-        *evaluate(qs, "", "    "),
-        "    damp = lam",
-        "    stall = 0",
-        "    it = 0",
-        "    stalled = False",
-        f"    atlim = {at_lim}",
-        "    while it < max_iter:",
-        "        if err2 <= tol2:",
-        "            break",
-        "        it += 1",
-        "        free = None",
-        "        if atlim:",
-        f"            g = [r*et{f' + {LF!r}*eu' if LF else ''}, r*ez - S2*eu{EP},"
-        f" z3*ez - S3*eu{EP}, ct*ez - S4*eu{EP}]",
-        "            # active set: a joint on a limit pushed outward is frozen",
-        "            free = [j for j, (v, lo, hi) in enumerate(zip((q1, q2, q3, q4), LO, HI))",
-        "                    if not ((v <= lo and g[j] < 0) or (v >= hi and g[j] > 0))]",
-        "            if not free:",
-        "                stalled = True",
-        "                break",
-        "            if len(free) == 4:",
-        "                free = None",
-        "            else:",
-        f"                jt = [[r, 0.0, 0.0, 0.0], [{LF!r}, -S2, -S3, -S4], [0.0, r, z3, ct]"
-        + (", [0.0, 1.0, 1.0, 1.0]]" if pitch else "]"),
-        "                normal = [[sum(row[i]*row[j] for row in jt) for j in free] for i in free]",
-        "                gf = [g[c] for c in free]",
-        "        m00 = S2*S2 + S3*S3 + S4*S4" + (f" + {LF * LF!r}" if LF else ""),
-        "        m01 = -(S2*r + S3*z3 + S4*ct)",
-        "        m11 = r*r + z3*z3 + ct*ct",
-    ]
-    if pitch:
-        L += ["        m02 = -(S2 + S3 + S4)", "        m12 = r + z3 + ct"]
-    L += [
-        "        rr = r*r",
-        "        improved = False",
-        "        while damp < 1e9:",
-        "            dl = damp*damp",
-        "            if free is None:",
-    ]
-    I4 = "                "
-    if LF:
-        L += [f"{I4}kk = {LF!r}*r/(rr + dl)",
-              f"{I4}a = m00 + dl - kk*{LF!r}*r",
-              f"{I4}bu = eu - kk*et"]
-    else:
-        L += [f"{I4}a = m00 + dl", f"{I4}bu = eu"]
-    L.append(f"{I4}d = m11 + dl")
-    if pitch:
-        L += [
-            f"{I4}f = 3.0 + dl",
-            f"{I4}c00 = d*f - m12*m12",
-            f"{I4}c01 = m02*m12 - m01*f",
-            f"{I4}c02 = m01*m12 - m02*d",
-            f"{I4}idet = 1.0/(a*c00 + m01*c01 + m02*c02)",
-            f"{I4}yu = (c00*bu + c01*ez + c02*ep)*idet",
-            f"{I4}yz = (c01*bu + (a*f - m02*m02)*ez + (m01*m02 - a*m12)*ep)*idet",
-            f"{I4}yp = (c02*bu + (m01*m02 - a*m12)*ez + (a*d - m01*m01)*ep)*idet",
-            f"{I4}n2 = q2 + (r*yz - S2*yu + yp)",
-            f"{I4}n3 = q3 + (z3*yz - S3*yu + yp)",
-            f"{I4}n4 = q4 + (ct*yz - S4*yu + yp)",
-        ]
-    else:
-        L += [
-            f"{I4}idet = 1.0/(a*d - m01*m01)",
-            f"{I4}yu = (d*bu - m01*ez)*idet",
-            f"{I4}yz = (a*ez - m01*bu)*idet",
-            f"{I4}n2 = q2 + (r*yz - S2*yu)",
-            f"{I4}n3 = q3 + (z3*yz - S3*yu)",
-            f"{I4}n4 = q4 + (ct*yz - S4*yu)",
-        ]
-    if LF:
-        L.append(f"{I4}n1 = q1 + (r*(et - {LF!r}*r*yu)/(rr + dl) + {LF!r}*yu)")
-    else:
-        L.append(f"{I4}n1 = q1 + r*et/(rr + dl)")
-    L += [
-        "            else:",
-        "                aa = [row[:] for row in normal]",
-        "                for i in range(len(free)):",
-        "                    aa[i][i] += dl",
-        "                st = solve_spd(aa, gf)",
-        "                nn = [q1, q2, q3, q4]",
-        "                for i, j in enumerate(free):",
-        "                    nn[j] += st[i]",
-        "                n1, n2, n3, n4 = nn",
-        "            nl = False",
-    ]
-    for nv, (lo, hi) in zip(ns, lims, strict=True):
-        L += [
-            f"            if {nv} <= {lo!r}:",
-            f"                {nv} = {lo!r}",
-            "                nl = True",
-            f"            elif {nv} >= {hi!r}:",
-            f"                {nv} = {hi!r}",
-            "                nl = True",
-        ]
-    L += evaluate(ns, "n", "            ")
-    L += [
-        "            if nerr2 < err2:",
-        "                rel = (err2 - nerr2)/err2",
-        "                q1, q2, q3, q4, err2, atlim = n1, n2, n3, n4, nerr2, nl",
-        f"                {', '.join(state)} = {', '.join('n' + v for v in state)}",
-        "                damp *= 0.1",
-        "                if damp < lam:",
-        "                    damp = lam",
-        "                improved = True",
-        "                stall = stall + 1 if rel < 1e-9 else 0",
-        "                break",
-        "            damp *= 10.0",
-        "        if not improved or stall >= 5:",
-        "            stalled = True",
-        "            break",
-        "    return q1, q2, q3, q4, err2, it, stalled",
-    ]
-    return "\n".join(L) + "\n"
-
-
-def _arm_kernel(arm: WritingArm, pitch: bool) -> Callable[..., tuple]:
-    """The compiled fused LM descent for ``arm`` (cached on the arm)."""
-    cache = arm._kernels  # type: ignore[attr-defined]
-    kern = cache.get(pitch)
-    if kern is None:
-        ns: dict[str, object] = {
-            "cos": math.cos, "sin": math.sin, "remainder": math.remainder,
-            "solve_spd": _solve_spd,
-            "LO": tuple(float(v) for v in arm.limits[:, 0]),
-            "HI": tuple(float(v) for v in arm.limits[:, 1]),
-        }
-        src = _arm_kernel_source(arm, pitch)
-        exec(compile(src, f"<solve_arm {arm.name} {'pitch' if pitch else 'position'}>", "exec"), ns)  # noqa: S102
-        kern = cache[pitch] = ns["attempt"]
-    return kern  # type: ignore[return-value]
-
-
-def _cell_table(
-    key: np.ndarray, score: np.ndarray, q: np.ndarray, ncells: int, k: int, gap: float
-) -> np.ndarray:
-    """Per cell, up to ``k`` sample indices (-1: none): the best-scored sample, then the
-    best ones farther than ``gap`` (max joint difference) from every one kept before."""
-    order = np.argsort(key + score * (0.999 / max(float(score.max()), 1e-300)))
-    ks = key[order]
-    first = np.empty(len(ks), dtype=bool)
-    first[0] = True
-    np.not_equal(ks[1:], ks[:-1], out=first[1:])
-    group = np.cumsum(first) - 1
-    cells = ks[first]
-    table = np.full((ncells, k), -1, dtype=np.int32)
-    kept = order[first]
-    table[cells, 0] = kept
-    if k > 1:
-        cols = [q[order, j] for j in range(q.shape[1])]
-        far = ~first
-    for c in range(1, k):
-        ref = kept[group]
-        dist = np.abs(cols[0] - q[ref, 0])
-        for j in range(1, len(cols)):
-            np.maximum(dist, np.abs(cols[j] - q[ref, j]), out=dist)
-        far &= dist > gap
-        rows = np.flatnonzero(far)
-        if not len(rows):
-            break
-        rk = ks[rows]
-        take = np.empty(len(rows), dtype=bool)
-        take[0] = True
-        np.not_equal(rk[1:], rk[:-1], out=take[1:])
-        hit = rows[take]
-        kept = kept.copy()  # cells without a new alternate keep comparing with the last one
-        kept[group[hit]] = order[hit]
-        table[ks[hit], c] = order[hit]
-        far[hit] = False
-    return table
-
-
-def _dilate(table: np.ndarray, strides: Sequence[int], passes: int) -> None:
-    """Give empty cells (no first sample) the samples of a filled face neighbour.
-
-    ``table`` is (cells, k) of a C-ordered grid whose outer x, y, z layer is empty
-    padding, so the flat shifts never carry a sample across those edges (a pitch-bin
-    shift at the +-pi seam borrows from the next z cell: still a nearby start)."""
-    for _ in range(passes):
-        src = table.copy()
-        for s in strides:
-            for a, b in ((slice(s, None), slice(None, -s)), (slice(None, -s), slice(s, None))):
-                d, n = table[a], src[b]
-                hole = (d[:, :1] < 0) & (n[:, :1] >= 0)
-                np.copyto(d, n, where=hole)
-
-
-class _Grid:
-    """A dense grid over (x, y, z) or (x, y, z, phi) holding sample rows (offsets into
-    the sample array, -1: none) per cell."""
-
-    def __init__(self, f: np.ndarray, q: np.ndarray, cell: float, phi_cell: float | None,
-                 score_extra: np.ndarray, k: int, gap: float, passes: int) -> None:
-        score = score_extra.copy()
-        org, dims, key = [], [], None
-        for ax in range(3):
-            p = f[:, ax]
-            o = math.floor(float(p.min()) / cell) * cell - cell  # one empty layer of padding
-            org.append(o)
-            dims.append(int((float(p.max()) - o) / cell) + 2)
-            u = (p - o) * (1.0 / cell)
-            i = u.astype(np.int64)
-            r = u - i - 0.5
-            score += r * r
-            key = i if key is None else key * dims[-1] + i
-        nphi = 0
-        if phi_cell is not None:
-            nphi = int(math.ceil(TWO_PI / phi_cell))
-            w = (f[:, 3] + math.pi) * (nphi / TWO_PI)
-            ip = np.minimum(w.astype(np.int64), nphi - 1)
-            key = key * nphi + ip
-            r = w - ip - 0.5
-            score += r * r
-        ncells = dims[0] * dims[1] * dims[2] * max(nphi, 1)
-        self.table = _cell_table(key, score, q, ncells, k, gap)
-        inner = max(nphi, 1)
-        strides = (inner, dims[2] * inner, dims[1] * dims[2] * inner) + ((1,) if nphi else ())
-        _dilate(self.table, strides, passes)
-        self.params = (float(org[0]), float(org[1]), float(org[2]), 1.0 / cell,
-                       dims[0], dims[1], dims[2], nphi, nphi / TWO_PI)
-
-    def key(self, x: float, y: float, z: float, phi: float | None) -> int:
-        ox, oy, oz, inv, nx, ny, nz, nphi, iphi = self.params
-        i, j, k = int((x - ox) * inv), int((y - oy) * inv), int((z - oz) * inv)
-        if not (0 <= i < nx and 0 <= j < ny and 0 <= k < nz):
-            return -1
-        flat = (i * ny + j) * nz + k
-        if nphi:
-            if not -math.pi < phi <= math.pi:  # type: ignore[operator]
-                phi = math.remainder(phi, TWO_PI)  # type: ignore[arg-type]
-            ip = int((phi + math.pi) * iphi)  # type: ignore[operator]
-            flat = flat * nphi + (ip if ip < nphi else nphi - 1)
-        return flat
-
-
-class ArmSeeds:
-    """A table of workspace samples of one arm, for starting numeric IK near the answer.
-
-    ``n`` configurations are drawn inside the joint limits (seeded) and binned on dense
-    grids: by pen position (cells of ``cell`` cm) for position targets, and by pen position
-    and pitch (``pitch_cell`` cm x ``phi_cell`` rad) for position + pitch targets, each also
-    on a grid twice as coarse. A cell keeps the sample nearest its centre (samples close to
-    a joint limit ranked down: they tend to stall on it) and alternates farther than
-    ``branch_gap`` rad in joint space from it (the arm's other branches: elbow up/down,
-    facing the target or reaching over the base), which :func:`solve_arm` tries when the
-    first start stalls. Empty cells borrow a neighbour's samples. :meth:`nearest` is O(1):
-    a few multiplications and one array look-up. With the defaults (Pincher) the build
-    takes ~0.35 s and the tables ~17 MB.
-    """
-
-    def __init__(
-        self,
-        arm: WritingArm,
-        n: int = 250_000,
-        cell: float = 1.0,
-        seed: int = 0,
-        pitch_cell: float = 2.5,
-        phi_cell: float = 0.25,
-        candidates: int = 4,
-        branch_gap: float = 1.0,
-        limit_weight: float = 2.0,
-        limit_margin: float = 0.6,
-        cell_weight: float = 2.0,
-    ) -> None:
-        rng = np.random.default_rng(seed)
-        lo, hi = arm.limits[:, 0], arm.limits[:, 1]
-        q = rng.uniform(lo, hi, (n, 4))
-        f = arm.fk(q)
-        self.cell = float(cell)
-        self.pitch_cell = float(pitch_cell)
-        self.phi_cell = float(phi_cell)
-        self.fallback = tuple(map(float, 0.5 * (lo + hi)))
-        # rank down starts that would run into a joint limit: for position targets, those
-        # within limit_margin rad of one; for position + pitch targets (no redundancy),
-        # those whose branch leaves the limits within the cell (:meth:`_reach_penalty`)
-        penalty = np.zeros(n)
-        for j in range(4):
-            gap = np.minimum(q[:, j] - lo[j], hi[j] - q[:, j])
-            near = np.maximum(0.0, 1.0 - gap / limit_margin)
-            penalty += near * near
-        penalty *= limit_weight
-        k = max(int(candidates), 1)
-        fine, coarse = self._reach_penalty(
-            arm, q, ((pitch_cell, phi_cell), (2 * pitch_cell, 2 * phi_cell)), cell_weight)
-        grids = [
-            _Grid(f, q, cell, None, penalty, min(k, 2), branch_gap, 2),
-            _Grid(f, q, 2 * cell, None, penalty, k, branch_gap, 1),
-            _Grid(f, q, pitch_cell, phi_cell, fine, min(k, 2), branch_gap, 1),
-            _Grid(f, q, 2 * pitch_cell, 2 * phi_cell, coarse, k, branch_gap, 1),
-        ]
-        # keep only the samples some cell refers to; tables then hold offsets into _q
-        mark = np.zeros(n + 1, dtype=bool)
-        for g in grids:
-            mark[g.table.ravel()] = True  # -1 marks the extra last slot
-        used = np.flatnonzero(mark[:n])
-        remap = np.full(n + 1, -1, dtype=np.int32)
-        remap[used] = 4 * np.arange(len(used), dtype=np.int32)
-        self._q = array("d", q[used].ravel().tobytes())
-        for g in grids:
-            g.table = remap[g.table]  # -1 stays -1 (remap[-1] == -1)
-        self._grids = grids
-        self._g3 = array("i", np.ascontiguousarray(grids[0].table[:, 0]).tobytes())
-        self._g4 = array("i", np.ascontiguousarray(grids[2].table[:, 0]).tobytes())
-        self._p3, self._p4 = grids[0].params, grids[2].params
-        self._arm = arm
-
-    @staticmethod
-    def _reach_penalty(
-        arm: WritingArm, q: np.ndarray, cells: Sequence[tuple[float, float]], weight: float
-    ) -> list[np.ndarray]:
-        """Rank of position + pitch samples, per ``(cell, phi_cell)``: how far the cell's
-        extent, mapped to the joints through the inverse Jacobian (to first order), would
-        push the sample past a joint limit.
-
-        A start whose own branch leaves the limits inside its cell sends LM into a limit
-        on the wrong branch; ranking those down keeps the branch that stays inside. Uses
-        the Jacobian in the heading frame (see :func:`_arm_kernel_source`): joint 1 moves
-        only the t row, joints 2..4 solve the 3x3 (u, z, phi) block by cross products."""
-        pa = q[:, 1] + arm.pitch_offset
-        pb = pa + q[:, 2]
-        pt = pb + q[:, 3]
-        ct = arm.tool * np.cos(pt)
-        s4 = arm.tool * np.sin(pt)
-        s3 = arm.forearm * np.sin(pb) + s4
-        s2 = arm.upper_arm * np.sin(pa) + s3
-        z3 = arm.forearm * np.cos(pb) + ct
-        r = arm.upper_arm * np.cos(pa) + z3
-        a = (-s2, -s3, -s4)  # rows of the 3x3 block: u, z, phi
-        b = (r, z3, ct)
-        # columns of the block's inverse: (b x c, c x a, a x b) / det with c = (1, 1, 1)
-        bxc = (b[1] - b[2], b[2] - b[0], b[0] - b[1])
-        cxa = (a[2] - a[1], a[0] - a[2], a[1] - a[0])
-        axb = (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-        lo, hi = arm.limits[:, 0], arm.limits[:, 1]
-        out = []
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            idet = np.abs(1.0 / (a[0] * bxc[0] + a[1] * bxc[1] + a[2] * bxc[2]))
-            ir = 1.0 / np.abs(r)
-            margin = [np.minimum(q[:, j] - lo[j], hi[j] - q[:, j]) for j in range(4)]
-            du = [idet * np.abs(v) for v in bxc]
-            dz = [idet * np.abs(v) for v in cxa]
-            dp = [idet * np.abs(v) for v in axb]
-            for cell, phi_cell in cells:
-                near = np.maximum(0.0, 1.0 - margin[0] / (cell * ir))
-                pen = near * near
-                uext = cell * (1.0 + abs(arm.lateral_offset) * ir)
-                for j in range(3):
-                    reach = du[j] * uext + dz[j] * cell + dp[j] * phi_cell
-                    near = np.maximum(0.0, 1.0 - margin[j + 1] / reach)
-                    pen += near * near
-                out.append(weight * np.nan_to_num(pen, nan=4.0, posinf=4.0))
-        return out
-
-    def _start(self, x: float, y: float, z: float, phi: float | None) -> Sequence[float]:
-        """:meth:`nearest` without the tuple (the hot path of :func:`solve_arm`)."""
-        if phi is None:
-            ox, oy, oz, inv, nx, ny, nz, _, _ = self._p3
-            i, j, k = int((x - ox) * inv), int((y - oy) * inv), int((z - oz) * inv)
-            if 0 <= i < nx and 0 <= j < ny and 0 <= k < nz:
-                at = self._g3[(i * ny + j) * nz + k]
-                if at >= 0:
-                    return self._q[at:at + 4]
-        else:
-            ox, oy, oz, inv, nx, ny, nz, nphi, iphi = self._p4
-            i, j, k = int((x - ox) * inv), int((y - oy) * inv), int((z - oz) * inv)
-            if 0 <= i < nx and 0 <= j < ny and 0 <= k < nz:
-                if not -math.pi < phi <= math.pi:
-                    phi = math.remainder(phi, TWO_PI)
-                ip = int((phi + math.pi) * iphi)
-                at = self._g4[((i * ny + j) * nz + k) * nphi + (ip if ip < nphi else nphi - 1)]
-                if at >= 0:
-                    return self._q[at:at + 4]
-        coarse = self._grids[1] if phi is None else self._grids[3]
-        key = coarse.key(x, y, z, phi)
-        at = int(coarse.table[key, 0]) if key >= 0 else -1
-        return self._q[at:at + 4] if at >= 0 else self.fallback
-
-    def nearest(self, x: float, y: float, z: float, phi: float | None = None) -> tuple[float, ...]:
-        """The first start for a target: the sample nearest the centre of its cell (phi:
-        its pitch cell too)."""
-        return tuple(self._start(x, y, z, phi))
-
-    def candidates(
-        self, x: float, y: float, z: float, phi: float | None = None, gap: float = 1.0,
-        wide: bool = False,
-    ) -> list[tuple[float, ...]]:
-        """Every start kept for the target: its cell's samples, then the coarse cell's,
-        without repeats (closer than ``gap`` rad in every joint to an earlier one).
-
-        ``wide``: then also the samples of the 3^d coarse cells around the target, nearest
-        (in task space) first - other branches for targets near a joint-limit boundary."""
-        fine, coarse = self._grids[2:] if phi is not None else self._grids[:2]
-        offsets: list[int] = []
-        for g in (fine, coarse):
-            key = g.key(x, y, z, phi)
-            if key >= 0:
-                offsets += [at for at in g.table[key].tolist() if at >= 0]
-        if wide:
-            offsets += self._around(coarse, x, y, z, phi)
-        out: list[tuple[float, ...]] = []
-        for at in offsets:
-            c = tuple(self._q[at:at + 4])
-            if all(max(abs(a - b) for a, b in zip(c, o, strict=True)) > gap for o in out):
-                out.append(c)
-        return out or [self.fallback]
-
-    def _around(self, g: _Grid, x: float, y: float, z: float, phi: float | None) -> list[int]:
-        """Sample offsets of the coarse cells around a target, nearest sample first."""
-        ox, oy, oz, inv, nx, ny, nz, nphi, iphi = g.params
-        ijk = [int((v - o) * inv) for v, o in ((x, ox), (y, oy), (z, oz))]
-        axes = [np.clip(np.arange(c - 1, c + 2), 0, d - 1)
-                for c, d in zip(ijk, (nx, ny, nz), strict=True)]
-        key = (axes[0][:, None, None] * ny + axes[1][None, :, None]) * nz + axes[2][None, None, :]
-        key = key.ravel()
-        if nphi:
-            ph = math.remainder(phi, TWO_PI)  # type: ignore[arg-type]
-            ip = min(int((ph + math.pi) * iphi), nphi - 1)
-            key = (key[:, None] * nphi + (np.arange(ip - 1, ip + 2) % nphi)[None, :]).ravel()
-        at = np.unique(g.table[key].ravel())
-        at = at[at >= 0]
-        if not len(at):
-            return []
-        qs = np.frombuffer(self._q, dtype=np.float64).reshape(-1, 4)[at // 4]
-        f = self._arm.fk(qs)
-        d = np.sqrt((f[:, 0] - x) ** 2 + (f[:, 1] - y) ** 2 + (f[:, 2] - z) ** 2)
-        if nphi:
-            d += 10.0 * np.abs(np.remainder(f[:, 3] - phi + math.pi, TWO_PI) - math.pi)
-        return at[np.argsort(d, kind="stable")].tolist()
-
-
 _POSITION = MASKS["position"]
 _PITCH = MASKS["position+pitch"]
 
@@ -874,7 +241,7 @@ def solve_arm(
     before the random restarts. Joint limits are always respected.
 
     The two named masks run a fused LM descent generated for the arm (see
-    :func:`_arm_kernel_source`; the same steps as :func:`dls`), other masks run :func:`dls`.
+    :mod:`kinegym.kinematics._kernels.arm_lm`; the same steps as :func:`dls`), other masks run :func:`dls`.
     """
     m = MASKS.get(mask) if isinstance(mask, str) else None
     if m is None:
@@ -900,7 +267,7 @@ def solve_arm(
     if kernels is None or not (m is _PITCH or m is _POSITION or m == _PITCH or m == _POSITION):
         return _solve_arm_generic(arm, (tx, ty, tz, tphi), m, start, seeds if seeded else None,
                                   lam, tol, max_iter, restarts, rng)
-    kern = kernels.get(pitch) or _arm_kernel(arm, pitch)
+    kern = kernels.get(pitch) or arm_kernel(arm, pitch)
     tol2 = tol * tol
     q1, q2, q3, q4, err2, it, stalled = kern(*start, tx, ty, tz, tphi, lam, tol2, max_iter)
     err = math.sqrt(err2)
@@ -961,8 +328,10 @@ def _solve_arm_generic(
     max_iter: int,
     restarts: int,
     rng: np.random.Generator | None,
+    fast: bool = True,
 ) -> IKResult:
-    """:func:`dls` on the arm's residual for any mask (the path of unusual masks)."""
+    """:func:`dls` on the arm's residual for any mask (the path of unusual masks; with
+    ``fast=False`` the numpy reference, which the fused kernels are tested against)."""
     rows = [i for i in range(4) if m[i]]
     task = arm.task_one
     wrap = m[3]
@@ -978,8 +347,8 @@ def _solve_arm_generic(
     phi = goal[3] if wrap else None
     alts = _alternates(seeds, goal[0], goal[1], goal[2], phi, start) if seeds else ()
     q = [min(max(float(v), lo), hi) for v, (lo, hi) in zip(start, lim, strict=False)]
-    return _restart_loop(_lm_attempt(residual, lim, lam, tol, max_iter), q, lim, tol, restarts,
-                         rng, alts)
+    descent = lm_attempt if fast else _lm_reference
+    return _restart_loop(descent(residual, lim, lam, tol, max_iter), q, lim, tol, restarts, rng, alts)
 
 
 # ---------------------------------------------------------------------------- CCD
