@@ -2,7 +2,7 @@
 
 A *stance* is which hole each arm holds, ``(h1, h2, h3)`` (map rows, arms labelled). An
 edge moves one arm to another hole and exists when the gait model
-(:func:`kinegym.envs.sim.climber.plan_move`) finds it feasible: one body pose within reach of the
+(:func:`kinegym.envs.sim.gait.plan_move`) finds it feasible: one body pose within reach of the
 four holes involved, elbows within limits, and the servos and grippers able to hold the
 body while the arm swings. The goal is a hole: any arm gripping it.
 
@@ -23,15 +23,9 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from kinegym.envs.sim.climber import (
-    ClimberModel,
-    MovePlan,
-    candidate_holes,
-    hop_counts,
-    plan_move,
-    stance_hops,
-    start_stances,
-)
+from kinegym.envs.climb_task import candidate_holes, hop_counts, stance_hops, start_stances
+from kinegym.envs.sim.climber_model import ClimberModel
+from kinegym.envs.sim.gait import MovePlan, plan_move
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
@@ -66,7 +60,7 @@ class GaitPlanner:
         weight: A* weight ``w >= 1`` (1 = shortest routes, larger = faster search).
         heading: body heading the gait keeps (rad).
         candidates: only moves to the ``candidates`` holes nearest the held holes
-            (:func:`kinegym.envs.sim.climber.candidate_holes`, the environment's action set); None
+            (:func:`kinegym.envs.climb_task.candidate_holes`, the environment's action set); None
             allows every hole within reach.
     """
 
@@ -115,14 +109,14 @@ class GaitPlanner:
 
     def hops(self, goal: int) -> list[int]:
         """Per hole: hops to ``goal`` through holes at most one arm span apart
-        (:func:`kinegym.envs.sim.climber.hop_counts`)."""
+        (:func:`kinegym.envs.climb_task.hop_counts`)."""
         got = self._hops.get(goal)
         if got is None:
             got = self._hops[goal] = hop_counts(self.holes, goal, self.span)
         return got
 
     def heuristic(self, stance: Stance, goal: int) -> float:
-        """Admissible lower bound on the moves left (:func:`kinegym.envs.sim.climber.stance_hops`)."""
+        """Admissible lower bound on the moves left (:func:`kinegym.envs.climb_task.stance_hops`)."""
         return float(stance_hops(self.hops(goal), stance))
 
     def plan(self, start: Sequence[int], goal: int, max_expansions: int = 20_000) -> Route:

@@ -27,7 +27,9 @@ import gymnasium as gym
 import numpy as np
 
 import kinegym  # noqa: F401
-from kinegym.envs.sim.climber import ClimberModel, KinematicClimber, candidate_holes, start_stances
+from kinegym.envs.climb_task import candidate_holes, start_stances
+from kinegym.envs.sim.climber import KinematicClimber
+from kinegym.envs.sim.climber_model import ClimberModel
 from kinegym.kinematics.holes import HoleMap
 
 

@@ -36,6 +36,7 @@ __all__ = [
     "Vector",
     "Matrix",
     "Section",
+    "Opaque",
     "ListOf",
     "available",
     "resolve",
@@ -176,6 +177,20 @@ class Section(Spec):
 
     def check(self, value: Any, source: str, key: str) -> Any:
         return validate(value, self.fields, source, prefix=key)
+
+
+@dataclass(frozen=True)
+class Opaque(Spec):
+    """A nested mapping whose keys its consumer validates with a schema of its own.
+
+    One robot file describes the whole robot, but each part reads its own section: the
+    kinematics reads the geometry and passes the simulation's section (``physics:``,
+    ``sim:``) through; the simulation validates it on load, next to its defaults."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        if not isinstance(value, Mapping):
+            raise ConfigError(source, key, value, "a mapping of keys to values")
+        return dict(value)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ simulates each move in pymunk with torque-limited servos and grippers that let g
 ``Discrete(3 * K)`` (``K = candidates``, default 8): action ``a`` moves arm ``a // K``
 (0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the centroid of
 the holes the robot believes it holds, nearest first
-(:func:`kinegym.envs.sim.climber.candidate_holes`). Actions the robot's own gait
+(:func:`kinegym.envs.climb_task.candidate_holes`). Actions the robot's own gait
 model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``
 (a stepped masked action is not an error: it fails as ``unreachable`` and costs a move).
 
@@ -47,7 +47,7 @@ gait policy needs to break cycles; see the README's training section).
 
 With ``hints=True`` ``6 K + 1`` entries follow (142 in all for K = 8 with ``memory``): the
 map's lower bound on the moves left from the believed stance
-(:func:`kinegym.envs.sim.climber.stance_hops`: hops of the held holes to the goal through holes one
+(:func:`kinegym.envs.climb_task.stance_hops`: hops of the held holes to the goal through holes one
 arm span apart) as ``min(h, 20) / 10``; per action ``j K + k`` how the move changes that
 bound, clipped to [-2, 2] and halved; per action whether that move already failed from this
 stance this episode (1) or not (0). The robot knows the map, so these are its own
@@ -104,18 +104,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from kinegym.envs.sim.climber import (
-    OUTCOMES,
-    ClimberModel,
-    KinematicClimber,
-    MovePlan,
-    PhysicsClimber,
-    candidate_holes,
-    hop_counts,
-    plan_move,
-    stance_hops,
-    start_stances,
-)
+from kinegym.envs.climb_task import candidate_holes, hop_counts, stance_hops, start_stances
+from kinegym.envs.sim.climber import KinematicClimber, PhysicsClimber
+from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
+from kinegym.envs.sim.gait import MovePlan, plan_move
 from kinegym.kinematics.holes import HoleMap
 from kinegym.kinematics.localization import Localizer
 from kinegym.kinematics.pose_fit import AmbiguousFixError, Fix, NoFixError, NoiseModel

@@ -36,7 +36,7 @@ from .errors import InvalidInputError, UnreachableError, as_array
 __all__ = [
     "ClimberGeometry",
     "CLIMBER_SCHEMA",
-    "CLIMBER_PHYSICS_SCHEMA",
+    "arm_ik_one",
     "hand_positions",
     "elbow_positions",
     "arm_ik",
@@ -51,32 +51,6 @@ _ARM_SCHEMA = {
     "shoulder_offset_cm": _configs.Vector(length=2, default=[0.0, 0.0]),
 }
 
-#: The robot's masses, servos, grippers and encoders (used by :mod:`kinegym.envs.sim.climber`; the
-#: kinematics only validates them, so one YAML file describes the whole robot).
-CLIMBER_PHYSICS_SCHEMA: dict[str, _configs.Spec] = {
-    "body_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.6),
-    "upper_link_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.08),
-    "lower_link_mass_kg": _configs.Number(lo=0.0, lo_open=True, default=0.06),
-    "hand_mass_kg": _configs.Number(lo=0.0, default=0.06),
-    "body_radius_cm": _configs.Number(lo=0.0, lo_open=True, default=5.0),
-    "shoulder_torque_ncm": _configs.Number(lo=0.0, lo_open=True, default=200.0),
-    "elbow_torque_ncm": _configs.Number(lo=0.0, lo_open=True, default=200.0),
-    "servo_gain_per_s": _configs.Number(lo=0.0, lo_open=True, default=12.0, doc="position loop gain (1/s)"),
-    "servo_speed_dps": _configs.Number(lo=0.0, lo_open=True, default=90.0, doc="servo speed limit (deg/s)"),
-    "servo_stiffness_ncm_per_deg": _configs.Number(lo=0.0, lo_open=True, default=40.0,
-                                                   doc="torque a servo may use per degree of error"),
-    "capture_radius_cm": _configs.Number(lo=0.0, lo_open=True, default=0.8),
-    "holding_force_n": _configs.Number(lo=0.0, lo_open=True, default=40.0),
-    "reach_margin_cm": _configs.Number(lo=0.0, default=0.5),
-    "torque_safety": _configs.Number(lo=0.0, lo_open=True, hi=2.0, default=0.85),
-    "stall_s": _configs.Number(lo=0.0, lo_open=True, default=0.5, doc="a servo at its limit this long stalls (s)"),
-    "shift_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=4.0),
-    "swing_speed_cm_s": _configs.Number(lo=0.0, lo_open=True, default=8.0),
-    "encoder_step_deg": _configs.Number(lo=0.0, default=0.05, doc="quantisation step (0 = none)"),
-    "physics_hz": _configs.Number(lo=30.0, hi=5000.0, default=240.0),
-}
-
-
 CLIMBER_SCHEMA: dict[str, _configs.Spec] = {
     "name": _configs.Text(default="climber"),
     "description": _configs.Text(default=""),
@@ -86,7 +60,7 @@ CLIMBER_SCHEMA: dict[str, _configs.Spec] = {
                                         item=_configs.Number(lo=0.0, hi=360.0),
                                         doc="allowed elbow angle (between the links)"),
     "sensor_sigma_deg": _configs.Number(lo=0.0, default=0.5, doc="encoder noise, 1 sigma"),
-    "physics": _configs.Section(fields=CLIMBER_PHYSICS_SCHEMA, default={}),
+    "physics": _configs.Opaque(default={}, doc="masses, servos, grippers, encoders: validated by kinegym.envs.sim"),
 }
 
 
@@ -123,10 +97,16 @@ class ClimberGeometry:
     def from_config(cls, name_or_path: str | Path = "climber") -> ClimberGeometry:
         """Load ``configs/robots/<name>.yaml`` (or a path); raises ``configs.ConfigError``."""
         cfg = _configs.load("robots", name_or_path, CLIMBER_SCHEMA)
+        return cls.from_dict(cfg, str(_configs.resolve("robots", name_or_path)))
+
+    @classmethod
+    def from_dict(cls, cfg: dict, source: str = "<config>") -> ClimberGeometry:
+        """From a robot config already validated against :data:`CLIMBER_SCHEMA` (``source``
+        names the file in errors): what a caller that also needs the physics section uses,
+        so that the file is read once."""
         lo, hi = cfg["elbow_limits_deg"]
         if lo >= hi:
-            src = str(_configs.resolve("robots", name_or_path))
-            raise _configs.ConfigError(src, "elbow_limits_deg", [lo, hi], "[low, high] with low < high")
+            raise _configs.ConfigError(source, "elbow_limits_deg", [lo, hi], "[low, high] with low < high")
         arms = cfg["arms"]
         return cls(
             l1=np.array([a["upper_link_cm"] for a in arms]),
@@ -164,6 +144,23 @@ def hand_positions(q: object, geom: ClimberGeometry | None = None) -> np.ndarray
     return (g.shoulders
             + g.l1[:, None] * np.stack([np.cos(s), np.sin(s)], axis=-1)
             + g.l2[:, None] * np.stack([np.cos(lower), np.sin(lower)], axis=-1))
+
+
+def arm_ik_one(l1: float, l2: float, dx: float, dy: float, branch: int = 1) -> tuple[float, float]:
+    """Two-link IK of one arm for one hand, in plain floats: ``(shoulder, elbow)`` (seed convention).
+
+    ``(dx, dy)`` is the hand relative to the shoulder (body frame); a hand out of reach is
+    clamped onto the nearest reachable circle (callers check reach first). The scalar twin of
+    :func:`arm_ik` for the simulation's inner loops; ``tests/test_climber.py`` pins the two equal.
+    """
+    d = math.hypot(dx, dy)
+    ce = max(-1.0, min(1.0, (l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2)))
+    e = math.acos(ce)
+    ca = max(-1.0, min(1.0, (l1 * l1 + d * d - l2 * l2) / (2 * l1 * max(d, 1e-12))))
+    s = math.atan2(dy, dx) - branch * math.acos(ca)
+    if branch < 0:
+        e = 2 * math.pi - e
+    return math.remainder(s, 2 * math.pi), e
 
 
 def arm_ik(hands: object, geom: ClimberGeometry | None = None, branch: int | object = 1) -> np.ndarray:

@@ -40,12 +40,24 @@ def _modules() -> dict[str, Path]:
 MODULES = _modules()
 
 
+def _walk(tree: ast.AST):  # noqa: ANN202 - an iterator of nodes
+    """``ast.walk`` less the ``if TYPE_CHECKING:`` blocks (annotations only, never run)."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+            todo.extend(node.orelse)
+            continue
+        yield node
+        todo.extend(ast.iter_child_nodes(node))
+
+
 def _imports(name: str, path: Path) -> set[str]:
     """Every module ``name`` imports, at any depth of its code (top level or inside functions)."""
     tree = ast.parse(path.read_text(), str(path))
     is_pkg = path.name == "__init__.py"
     out: set[str] = set()
-    for node in ast.walk(tree):
+    for node in _walk(tree):
         if isinstance(node, ast.Import):
             out.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):

@@ -122,3 +122,18 @@ def test_hole_map_grid() -> None:
         g.position((99, 99))
     with pytest.raises(InvalidInputError, match="jitter"):
         HoleMap.grid(3, 3, spacing=10, jitter=6)
+
+
+def test_scalar_arm_ik_equals_the_vectorised_one() -> None:
+    """The simulation's plain-float two-link IK is the same algorithm as :func:`arm_ik`."""
+    from kinegym.kinematics.climber import arm_ik_one
+
+    rng = np.random.default_rng(5)
+    geom = ClimberGeometry(l1=np.array([10.0, 9.0, 12.0]), l2=np.array([10.0, 11.0, 8.0]))
+    for branch in (1, -1):
+        for _ in range(200):
+            hands = np.array([[math.cos(a) * r, math.sin(a) * r] for a, r in zip(
+                rng.uniform(-math.pi, math.pi, 3), rng.uniform(0.3, 0.99, 3) * (geom.l1 + geom.l2))])
+            ref = arm_ik(hands, geom, branch)
+            one = [arm_ik_one(float(geom.l1[k]), float(geom.l2[k]), *hands[k], branch) for k in range(3)]
+            np.testing.assert_allclose(np.array(one), ref, atol=1e-9)

@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from kinegym.agents.gait_planner import GaitPlanner, start_stances
-from kinegym.envs.sim import climber as C
-from kinegym.envs.sim.climber import OUTCOMES, ClimberModel, KinematicClimber, MovePlan, PhysicsClimber, plan_move
+from kinegym.envs.sim import gait as C
+from kinegym.envs.sim.climber import KinematicClimber, PhysicsClimber
+from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
+from kinegym.envs.sim.gait import MovePlan, plan_move
 from kinegym.kinematics import HoleMap
 from kinegym.kinematics.climber import body_to_wall, hand_positions
 

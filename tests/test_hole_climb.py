@@ -216,7 +216,7 @@ def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
     route is never shorter), each feasible move changes it by -1..1, and a move that failed
     from a stance is flagged there."""
     from kinegym.agents.gait_planner import GaitPlanner
-    from kinegym.envs.sim.climber import stance_hops
+    from kinegym.envs.climb_task import stance_hops
 
     env = gym.make(ENV_ID, memory=True, hints=True)
     u = env.unwrapped

@@ -1,0 +1,309 @@
+"""The climber's gait judged analytically: can this arm move to that hole, and how?
+
+Seed 000 stopped at statics and named "equations for movements" as the next step; this is
+the gait the seed sketches, as a feasibility model: shift the body with all three hands
+gripping, release one arm, swing its hand to the new hole, grip. :func:`plan_move` returns a
+:class:`MovePlan` (poses, joint angles, the static loads it checked) or the reason against
+the move: reach and elbow limits along the shift and the swing, the static torques at the
+four holding servos while one arm swings (:func:`swing_loads`: the 1-parameter family of
+force splits between the two holding arms is searched for one within every servo's limit),
+the free arm's own gravity torque and each gripper's holding force. Microseconds per move:
+the planner, the kinematic simulation and the environment's action masks all use it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinegym.envs.sim.climber_model import ClimberModel, G
+from kinegym.kinematics.climber import arm_ik_one
+from kinegym.kinematics.holes import HoleMap
+
+__all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "min_enclosing_circle"]
+
+
+def min_enclosing_circle(pts: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
+    """Smallest circle ``(cx, cy, r)`` around 1..4 points.
+
+    If the circle on the farthest pair as diameter holds every point it is the answer;
+    otherwise the answer passes through three points, and it is the smallest circumcircle
+    of a triple that holds the rest.
+    """
+    n = len(pts)
+    if n == 1:
+        return pts[0][0], pts[0][1], 0.0
+    far, fi, fj = -1.0, 0, 1
+    for i in range(n):
+        ax, ay = pts[i]
+        for j in range(i + 1, n):
+            d = (ax - pts[j][0]) ** 2 + (ay - pts[j][1]) ** 2
+            if d > far:
+                far, fi, fj = d, i, j
+    cx, cy = 0.5 * (pts[fi][0] + pts[fj][0]), 0.5 * (pts[fi][1] + pts[fj][1])
+    r2 = 0.25 * far * (1 + 1e-12) + 1e-12
+    if all((px - cx) ** 2 + (py - cy) ** 2 <= r2 for px, py in pts):
+        return cx, cy, 0.5 * math.sqrt(far)
+    best = (cx, cy, math.inf)
+    for i in range(n):
+        ax, ay = pts[i]
+        for j in range(i + 1, n):
+            bx, by = pts[j]
+            for k in range(j + 1, n):
+                qx, qy = pts[k]
+                d = 2 * (ax * (by - qy) + bx * (qy - ay) + qx * (ay - by))
+                if abs(d) < 1e-12:
+                    continue
+                a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, qx * qx + qy * qy
+                ux = (a2 * (by - qy) + b2 * (qy - ay) + c2 * (ay - by)) / d
+                uy = (a2 * (qx - bx) + b2 * (ax - qx) + c2 * (bx - ax)) / d
+                rr = (ax - ux) ** 2 + (ay - uy) ** 2
+                if rr < best[2] ** 2:
+                    lim = rr * (1 + 1e-12) + 1e-12
+                    if all((px - ux) ** 2 + (py - uy) ** 2 <= lim for px, py in pts):
+                        best = (ux, uy, math.sqrt(rr))
+    return best
+
+
+@dataclass
+class MovePlan:
+    """A feasible move: arm, new hole (map row), poses before and after the shift, the six
+    joint angles after the move (rad), and the static load figures that were checked."""
+
+    arm: int
+    hole: int
+    pose_from: tuple[float, float, float]
+    pose_to: tuple[float, float, float]
+    q_to: np.ndarray
+    torque_ratio: float  # worst servo torque over its limit during the swing (best split)
+    grip_force_n: float  # largest holding force during the swing
+
+
+@dataclass
+class GaitResult:
+    """What one move did: ``outcome`` (one of :data:`OUTCOMES`), a human ``reason``, the
+    stance and true pose after it, the physics steps and simulated seconds it took."""
+
+    outcome: str
+    reason: str
+    stance: tuple[int, int, int]
+    pose: np.ndarray
+    steps: int = 0
+    seconds: float = 0.0
+    plan: MovePlan | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.outcome == "ok"
+
+
+def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Sequence[tuple[float, float]],
+                q: Sequence[tuple[float, float]], free: int, safety: float | None = None,
+                hold: float | None = None) -> tuple[float, float]:
+    """Static loads while arm ``free`` swings and the other two hold the body at ``pose``.
+
+    Returns ``(worst torque ratio, largest gripper force in N)`` for the most favourable
+    split of the body's weight between the two holding arms: each holding arm is a chain
+    from a passive pivot at its hand, so the body's equilibrium leaves one free parameter
+    (how much each arm pulls along the line between their hands); every servo's torque is
+    affine in it, and the parameter is chosen to minimise the worst servo's torque over its
+    limit (exact: the maximum of the affine ratios is minimised over the line). The free
+    arm's own servos must hold its links against gravity in its pose at the new hole.
+
+    With ``safety`` given, any split that keeps every servo within ``safety`` of its limit
+    and every gripper within its holding force is taken instead of the best one (cheaper:
+    one pass over intervals), and ``(inf, inf)`` means there is none. ``hold`` overrides the
+    grippers' holding force (N).
+    """
+    p = model.phys
+    cx, cy, th = pose
+    w_up, w_low, w_hand = p.upper_link_mass_kg * G, p.lower_link_mass_kg * G, p.hand_mass_kg * G
+    offs = model.offsets(th)
+    links = model._links  # type: ignore[attr-defined]
+    pts = []
+    for k in range(3):
+        sx, sy = cx + offs[k][0], cy + offs[k][1]
+        a1 = th + q[k][0]
+        ex, ey = sx + links[k][0] * math.cos(a1), sy + links[k][0] * math.sin(a1)
+        pts.append((sx, sy, ex, ey, hands[k][0], hands[k][1]))
+    # (a moment of a weight w at horizontal offset dx is -w dx: gravity is along -y)
+    # the free arm hangs from its shoulder: its weight and moment act on the body
+    sx, sy, ex, ey, hx, hy = pts[free]
+    m_free = -w_up * 0.5 * (ex - sx) - w_low * (0.5 * (ex + hx) - sx) - w_hand * (hx - sx)
+    t_free_s = abs(m_free) / p.shoulder_torque_ncm
+    t_free_e = abs(-w_low * 0.5 * (hx - ex) - w_hand * (hx - ex)) / p.elbow_torque_ncm
+    w_arm = w_up + w_low + w_hand
+    w_body = p.body_mass_kg * G + w_arm  # the free arm's weight, hung at its shoulder
+    a, b = (1, 2) if free == 0 else (0, 2) if free == 1 else (0, 1)
+    # G_k: moment about the hand of the holding arm's own link weights
+    sax, say, eax, eay, hax, hay = pts[a]
+    sbx, sby, ebx, eby, hbx, hby = pts[b]
+    ga = -w_up * (0.5 * (sax + eax) - hax) - w_low * 0.5 * (eax - hax)
+    gb = -w_up * (0.5 * (sbx + ebx) - hbx) - w_low * 0.5 * (ebx - hbx)
+    # F_k: the force arm k exerts on the body at its shoulder. Arm k about its hand (a
+    # passive pivot): tau_s = (S - H) x F_k - G_k for its shoulder servo. The body:
+    # F_a + F_b = (0, w_body), and its moments, with the shoulder torques substituted,
+    # sum_k (C - H_k) x F_k = sum_k G_k + moment of the body's load about C
+    m_load = -w_arm * (sx - cx) + m_free
+    rhs = ga + gb + m_load - (cx - hbx) * w_body  # cross(u, F_a) after F_b = W - F_a
+    ux, uy = hbx - hax, hby - hay
+    uu = ux * ux + uy * uy
+    fpx, fpy = -uy * rhs / uu, ux * rhs / uu
+    # torques affine in t (F_a = F_p + t u): shoulder and elbow of both holding arms
+    lines = []  # (a0, b1, limit) with torque = a0 + b1 t
+    grips = []
+    for (sxk, syk, exk, eyk, hxk, hyk), gk, f0x, f0y, dfx, dfy in (
+            (pts[a], ga, fpx, fpy, ux, uy), (pts[b], gb, -fpx, w_body - fpy, -ux, -uy)):
+        # the arm receives -F_k from the body at S
+        dsx, dsy, dex, dey = sxk - hxk, syk - hyk, exk - hxk, eyk - hyk
+        lines.append((dsx * f0y - dsy * f0x - gk, dsx * dfy - dsy * dfx, p.shoulder_torque_ncm))
+        # elbow: the lower link about the hand; the upper link passes F_k + its weight to it
+        lines.append((w_low * 0.5 * dex + dex * (f0y + w_up) - dey * f0x, dex * dfy - dey * dfx,
+                      p.elbow_torque_ncm))
+        grips.append((f0x, f0y + w_arm, dfx, dfy))
+    norm = [(a0 / lim, b1 / lim) for a0, b1, lim in lines]
+    if safety is None:
+        t_best = _minimax_line(norm)
+    else:
+        t_best = _feasible_split(norm, grips, safety, p.holding_force_n if hold is None else hold)
+        if t_best is None:
+            return math.inf, math.inf
+    ratio = max(abs(a0 + b1 * t_best) for a0, b1 in norm)
+    grip = max(math.hypot(gx + dx * t_best, gy + dy * t_best) for gx, gy, dx, dy in grips)
+    return max(ratio, t_free_s, t_free_e), grip
+
+
+def _feasible_split(lines: Sequence[tuple[float, float]], grips: Sequence[tuple[float, float, float, float]],
+                    limit: float, hold: float) -> float | None:
+    """A split ``t`` with every servo within ``limit`` of its torque (``|a + b t| <= limit``)
+    and every gripper within ``hold`` N, or None: intervals intersected in one pass; the
+    middle of what is left is returned."""
+    lo, hi = -math.inf, math.inf
+    for a, b in lines:
+        if abs(b) < 1e-12:
+            if abs(a) > limit:
+                return None
+            continue
+        t1, t2 = (-limit - a) / b, (limit - a) / b
+        if t1 > t2:
+            t1, t2 = t2, t1
+        lo, hi = max(lo, t1), min(hi, t2)
+        if lo > hi:
+            return None
+    for gx, gy, dx, dy in grips:  # |(gx, gy) + t (dx, dy)| <= hold: a quadratic in t
+        qa, qb, qc = dx * dx + dy * dy, gx * dx + gy * dy, gx * gx + gy * gy - hold * hold
+        if qa < 1e-12:
+            if qc > 0:
+                return None
+            continue
+        disc = qb * qb - qa * qc
+        if disc < 0:
+            return None
+        r = math.sqrt(disc)
+        lo, hi = max(lo, (-qb - r) / qa), min(hi, (-qb + r) / qa)
+        if lo > hi:
+            return None
+    if math.isinf(lo) and math.isinf(hi):
+        return 0.0
+    return hi if math.isinf(lo) else lo if math.isinf(hi) else 0.5 * (lo + hi)
+
+
+def _minimax_line(lines: Sequence[tuple[float, float]]) -> float:
+    """``t`` minimising ``max_j |a_j + b_j t|``: a convex piecewise-linear function of one
+    variable, minimised by bisection on its slope (exact to 1e-9 of the breakpoints' span)."""
+    brk = [-a / b for a, b in lines if abs(b) > 1e-12]
+    if not brk:
+        return 0.0
+    lo, hi = min(brk) - 1.0, max(brk) + 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        # the slope of the maximum at mid: that of the largest term
+        best, slope = -1.0, 0.0
+        for a, b in lines:
+            v = a + b * mid
+            if abs(v) > best:
+                best, slope = abs(v), b if v >= 0 else -b
+        if slope > 0:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo < 1e-9 * (1.0 + abs(mid)):
+            break
+    return 0.5 * (lo + hi)
+
+
+def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: int, hole: int,
+              heading: float = 0.0, branch: int = 1) -> MovePlan | tuple[str, str]:
+    """Judge moving ``arm`` (0..2) from its hole to map row ``hole``: a :class:`MovePlan`, or
+    ``(outcome, reason)`` with the outcome ``unreachable`` or ``torque_limit`` (or
+    ``grip_lost`` when a gripper would have to hold more than it can)."""
+    p = model.phys
+    ids = holes.id_list
+    if hole in stance:
+        return "unreachable", f"hole {ids[hole]} is already held"
+    xy = holes.xy_list
+    offs = model.offsets(heading)
+    s0, s1, s2 = stance
+    pts = [(xy[s0][0] - offs[0][0], xy[s0][1] - offs[0][1]), (xy[s1][0] - offs[1][0], xy[s1][1] - offs[1][1]),
+           (xy[s2][0] - offs[2][0], xy[s2][1] - offs[2][1]), (xy[hole][0] - offs[arm][0], xy[hole][1] - offs[arm][1])]
+    inner, outer = model.reach
+    span2 = (2 * max(outer)) ** 2
+    for i in range(4):  # quick rejection: two holes further apart than two arms can span
+        xi, yi = pts[i]
+        for j in range(i + 1, 4):
+            if (xi - pts[j][0]) ** 2 + (yi - pts[j][1]) ** 2 > span2:
+                return "unreachable", (f"holes {ids[stance[i]]} and {ids[hole if j == 3 else stance[j]]} "
+                                       f"are too far apart")
+    cx, cy, r = min_enclosing_circle(pts)
+    clear = p.body_radius_cm + p.reach_margin_cm  # no hole under the body itself
+    for k in range(4):
+        a = arm if k == 3 else k
+        d = math.hypot(pts[k][0] - cx, pts[k][1] - cy)
+        if d > outer[a] or d < max(inner[a], clear):
+            return "unreachable", (f"no body pose reaches holes {[ids[h] for h in stance]} and {ids[hole]} at once "
+                                   f"(they need {r:.1f} cm of reach, the arms have {min(outer):.1f}; a hole under "
+                                   f"the body, within {clear:.1f} cm, cannot be held)")
+    pose_to = (cx, cy, heading)
+    new_stance = [s0, s1, s2]
+    new_stance[arm] = hole
+    q = []
+    lo, hi = model.geom.elbow_limits
+    c, s = math.cos(heading), math.sin(heading)
+    links = model._links  # type: ignore[attr-defined]
+    for k in range(3):
+        hx, hy = xy[new_stance[k]]
+        bx, by = hx - cx - offs[k][0], hy - cy - offs[k][1]  # wall-frame vector shoulder -> hand
+        sk, ek = arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch)
+        if not lo <= ek <= hi:
+            return "unreachable", (f"arm {k + 1} would need an elbow of {math.degrees(ek):.0f} deg (limits "
+                                   f"{math.degrees(lo):.0f}..{math.degrees(hi):.0f})")
+        q.append((sk, ek))
+    hands = [xy[h] for h in new_stance]
+    ratio, grip = swing_loads(model, pose_to, hands, q, arm, p.torque_safety)
+    if ratio > p.torque_safety:
+        # which limit bites? without the grippers' limit, is there a split?
+        if swing_loads(model, pose_to, hands, q, arm, p.torque_safety, hold=math.inf)[0] > p.torque_safety:
+            return "torque_limit", (f"no split of the body's weight between the two holding arms keeps every "
+                                    f"servo within {p.torque_safety:.0%} of its torque while arm {arm + 1} swings")
+        return "grip_lost", f"a gripper would have to hold more than {p.holding_force_n:g} N while arm {arm + 1} swings"
+    return MovePlan(arm, hole, (0.0, 0.0, heading), pose_to, np.array(q), ratio, grip)
+
+
+def _around(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float], f: float
+            ) -> tuple[float, float]:
+    """The point a share ``f`` of the way from ``a`` to ``b`` on the path that sweeps round
+    ``centre`` (angle and radius interpolated): a swinging hand never passes over the body."""
+    ax, ay, bx, by = a[0] - centre[0], a[1] - centre[1], b[0] - centre[0], b[1] - centre[1]
+    ra, rb = math.hypot(ax, ay), math.hypot(bx, by)
+    ta = math.atan2(ay, ax)
+    dt = math.remainder(math.atan2(by, bx) - ta, 2 * math.pi)
+    r, t = ra + f * (rb - ra), ta + f * dt
+    return centre[0] + r * math.cos(t), centre[1] + r * math.sin(t)
+
+
+def _path_length(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    pts = [_around(centre, a, b, i / 16) for i in range(17)]
+    return sum(math.hypot(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]) for i in range(16))
