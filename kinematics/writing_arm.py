@@ -47,7 +47,7 @@ from ._kernels.arm_closed_form import ik_fast_function
 from .chains import DHChain, DHLink, PoEChain
 from .errors import InvalidInputError, JointLimitError, UnreachableError, as_array
 
-__all__ = ["WritingArm", "ARM_SCHEMA", "ARM_SIM_SCHEMA", "BRANCHES"]
+__all__ = ["WritingArm", "ARM_SCHEMA", "BRANCHES"]
 
 TWO_PI = 2.0 * math.pi
 #: Branch order of :meth:`WritingArm.ik_all`: (reach, sign of q3).
@@ -76,80 +76,9 @@ ARM_SCHEMA: dict[str, _configs.Spec] = {
                                doc="upper arm, forearm, pen holder (used by the simulation)"),
     "max_torque_ncm": _configs.Vector(length=4, default=[150.0, 150.0, 150.0, 150.0],
                                       item=_configs.Number(lo=0.0, lo_open=True)),
+    "sim": _configs.Opaque(default={}, doc="servo loops, pen, sponge, board: validated by kinegym.envs.sim.arm_config"),
 }
 
-_N = _configs.Number
-_JOINT_SIM_SCHEMA: dict[str, _configs.Spec] = {
-    "kp_per_s": _N(lo=0.0, lo_open=True, default=12.0, doc="outer loop: speed command per rad of position error (1/s)"),
-    "kv_ncm_s": _N(lo=0.0, lo_open=True, default=50.0, doc="inner loop: torque per rad/s of speed error (N cm s)"),
-    "ki_ncm": _N(lo=0.0, default=500.0, doc="inner loop integral: torque per rad of speed error integral (N cm)"),
-    "max_speed_deg_s": _N(lo=0.0, lo_open=True, default=90.0, doc="speed command limit (deg/s)"),
-    "rotor_inertia_kgcm2": _N(lo=0.0, lo_open=True, default=20.0,
-                              doc="motor and gear inertia reflected to the joint (kg cm^2)"),
-    "friction_ncm": _N(lo=0.0, default=1.0, doc="Coulomb friction of the gear train (N cm)"),
-    "backlash_deg": _N(lo=0.0, default=0.2, doc="gear play between motor (encoder) and link (deg)"),
-    "encoder_step_deg": _N(lo=0.0, default=0.005, doc="encoder resolution at the joint (deg; 0 = ideal)"),
-    "absolute": _configs.Flag(default=False, doc="absolute position sensor (a hobby servo): no homing"),
-    "index_deg": _N(lo=-360.0, hi=360.0, default=0.0, doc="joint angle of the index switch (model deg)"),
-    "homing_dir": _N(lo=-1, hi=1, integer=True, default=1, doc="first homing direction (+1 / -1)"),
-    "homing_sweep_deg": _N(lo=0.0, default=0.0,
-                           doc="turn back after this excursion without an index (0: only at a limit stop)"),
-    "homing_speed_deg_s": _N(lo=0.0, lo_open=True, default=20.0),
-}
-
-#: The ``sim:`` section of an arm YAML: servo loops, encoders, pen, sponge, board placement
-#: and drawing speeds (used by :mod:`kinegym.envs.sim.arm`; validated here so that one file
-#: describes the arm). Lengths cm, angles deg, masses kg, torques N cm, speeds cm/s.
-ARM_SIM_SCHEMA: dict[str, _configs.Spec] = {
-    "control_hz": _N(lo=100.0, hi=10000.0, default=1000.0, doc="servo loop and physics rate (Hz)"),
-    "speed_filter_hz": _N(lo=1.0, lo_open=False, default=60.0, doc="low-pass on the differentiated encoder (Hz)"),
-    "base_inertia_kgcm2": _N(lo=0.0, default=20.0, doc="turntable inertia about the yaw axis (kg cm^2)"),
-    "joints": _configs.ListOf(item=_configs.Section(fields=_JOINT_SIM_SCHEMA), min_len=4, max_len=4,
-                              default=[{}, {}, {}, {}], doc="per joint q1..q4"),
-    "park_cm": _configs.Vector(length=3, default=[0.0, 12.0, 8.0], doc="pen parked at (x, y, z), pen vertical"),
-    "start_spread_deg": _N(lo=0.0, hi=90.0, default=15.0,
-                           doc="homing starts up to this far from the park pose, per joint"),
-    "stall_deg": _N(lo=0.0, lo_open=True, default=4.0,
-                    doc="homing: command this far ahead of the encoder means a limit stop"),
-    "pen": _configs.Section(default={}, fields={
-        "width_cm": _N(lo=0.0, lo_open=True, default=0.12),
-        "colour": _configs.Vector(length=3, default=[25, 60, 175], item=_N(lo=0, hi=255, integer=True),
-                                  doc="RGB of the ink"),
-        "spring_n_per_cm": _N(lo=0.0, lo_open=True, default=1.5, doc="pen holder spring (N/cm)"),
-        "travel_cm": _N(lo=0.0, lo_open=True, default=0.5, doc="spring travel before the holder bottoms out"),
-        "press_cm": _N(lo=0.0, default=0.15, doc="commanded depth below the board while drawing"),
-        "lift_cm": _N(lo=0.0, lo_open=True, default=1.0, doc="pen height above the board between strokes"),
-        "friction": _N(lo=0.0, default=0.3, doc="pen-on-board friction coefficient"),
-    }),
-    "sponge": _configs.Section(default={}, fields={
-        "width_cm": _N(lo=0.0, lo_open=True, default=3.6),
-        "offset_cm": _N(lo=0.0, default=1.5, doc="tool axis to sponge face (pen turned to phi = 90 deg)"),
-        "press_cm": _N(lo=0.0, default=0.2),
-        "efficiency": _N(lo=0.0, hi=1.0, default=0.995, doc="share of the ink one pass removes"),
-        "pass_step_cm": _N(lo=0.0, lo_open=True, default=3.0, doc="offset between passes (thesis: 3 cm)"),
-    }),
-    "board": _configs.Section(default={}, fields={
-        "canvas_origin_cm": _configs.Vector(length=2, default=[-10.0, 3.0],
-                                            doc="arm-frame position of the canvas's lower-left corner"),
-        "canvas_size_cm": _configs.Vector(length=2, default=[20.0, 20.0], item=_N(lo=1.0)),
-        "field_origin_cm": _configs.Vector(length=2, default=[2.5, 2.0],
-                                           doc="field's lower-left corner on the canvas"),
-        "n": _N(lo=2, hi=9, integer=True, default=5, doc="cells per side"),
-        "cell_cm": _N(lo=0.5, default=3.0, doc="cell side (thesis: 3 cm)"),
-        "o_radius_ratio": _N(lo=0.05, hi=0.5, default=0.25, doc="O radius / cell (thesis: 1/4)"),
-        "x_margin_ratio": _N(lo=0.0, hi=0.45, default=0.2, doc="X corner inset / cell (thesis: 1/5)"),
-    }),
-    "drawing": _configs.Section(default={}, fields={
-        "speed_levels_cm_s": _configs.Vector(default=[1.0, 2.0, 3.0, 4.0, 6.0, 8.0], item=_N(lo=0.0, lo_open=True),
-                                             doc="pen speed per GUI level 0..5"),
-        "default_level": _N(lo=0, hi=5, integer=True, default=2),
-        "travel_speed_cm_s": _N(lo=0.0, lo_open=True, default=8.0, doc="pen-up moves"),
-        "accel_cm_s2": _N(lo=0.0, lo_open=True, default=30.0, doc="start / stop ramps of every move"),
-        "settle_s": _N(lo=0.0, default=0.15, doc="dwell after lowering and before lifting"),
-        "turn_height_cm": _N(lo=0.0, default=6.0, doc="pen height at which the tool turns to the sponge and back"),
-    }),
-}
-ARM_SCHEMA["sim"] = _configs.Section(fields=ARM_SIM_SCHEMA, default={}, doc="simulation (envs.sim.arm)")
 
 
 # ik_all works on 14 rows of joint values: per reach (front, back) q1, then q2, q3, q4 of
@@ -211,7 +140,14 @@ class WritingArm:
     def from_config(cls, name_or_path: str | Path = "pincher") -> WritingArm:
         """Load ``configs/arms/<name>.yaml`` or a YAML file; raises ``configs.ConfigError``."""
         cfg = _configs.load("arms", name_or_path, ARM_SCHEMA)
-        src = str(_configs.resolve("arms", name_or_path))
+        return cls.from_dict(cfg, str(_configs.resolve("arms", name_or_path)))
+
+    @classmethod
+    def from_dict(cls, cfg: dict, source: str = "<config>") -> WritingArm:
+        """From an arm config already validated against :data:`ARM_SCHEMA` (``source`` names
+        the file in errors): what a caller that also needs the ``sim:`` section uses, so that
+        the file is read once."""
+        src = source
         sign = [int(s) for s in cfg["servo_sign"]]
         for i, s in enumerate(sign):
             if s not in (-1, 1):

@@ -50,17 +50,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pymunk
 
 import kinegym.configs as _configs
 from kinegym.kinematics.errors import UnreachableError
 from kinegym.kinematics.writing_arm import ARM_SCHEMA, WritingArm
 
+from .arm_config import ARM_SIM_SCHEMA, JointParams, joint_params
+from .arm_physics import _NCM, ArmPhysics
+from .arm_record import HomingReport, Recording, StepMetrics, step_metrics
+from .arm_render import render_arm, view_box
 from .board import BoardCanvas, Pen
 from .strokes import (
     TOOL_NONE,
@@ -77,11 +79,7 @@ from .strokes import (
 __all__ = ["ArmSim", "Recording", "HomingError", "HomingReport", "StepMetrics", "step_metrics", "JointParams",
            "view_box"]
 
-_NCM = 100.0  # 1 N cm in pymunk units (kg cm^2 / s^2)
 _N = 100.0  # 1 N in kg cm / s^2
-_G = 981.0  # cm / s^2
-_STOP_MARGIN = math.radians(3.0)  # hard stops beyond the soft joint limits
-_ROTOR_MASS = 1e-3  # kg: rotors are carried by their parent link; their mass is negligible
 _INK_STEP = 0.02  # cm between recorded ink points
 _SPONGE_CHUNK = 1.0  # cm of wipe per erase call
 _V_EPS = 0.2  # cm/s: friction is regularised below this tip speed
@@ -91,267 +89,6 @@ _HARD_K = 100.0  # the holder bottoming out is this much stiffer than its spring
 
 class HomingError(RuntimeError):
     """Homing failed: no index found after reversing at both stops, or timed out."""
-
-
-@dataclass(frozen=True)
-class JointParams:
-    """One servo, in SI-free units: rad, rad/s, N cm, kg cm^2."""
-
-    kp: float
-    kv: float
-    ki: float
-    max_speed: float
-    rotor_inertia: float
-    friction: float
-    backlash: float
-    encoder_step: float
-    absolute: bool
-    index: float
-    homing_dir: int
-    homing_sweep: float
-    homing_speed: float
-    max_torque: float
-    lo: float
-    hi: float
-
-
-@dataclass(frozen=True)
-class HomingReport:
-    """What homing found: per joint the offset set (rad), the true power-on offset error it
-    removed, reversals made and time taken; ``residual`` is the encoder belief's error after
-    homing (rad, per joint; backlash and quantisation remain)."""
-
-    offsets: np.ndarray
-    start_error: np.ndarray
-    residual: np.ndarray
-    reversals: tuple[int, ...]
-    duration_s: float
-
-
-@dataclass(frozen=True)
-class StepMetrics:
-    """Step response of one joint: settling time (s, into +-``band`` of the step), overshoot
-    (fraction of the step), static error (rad, mean over the last 10 %), rise time 10-90 %."""
-
-    settling_s: float
-    overshoot: float
-    static_error: float
-    rise_s: float
-
-
-def step_metrics(t: np.ndarray, y: np.ndarray, start: float, target: float, band: float = 0.02) -> StepMetrics:
-    """Settling time, overshoot, static error and rise time of a response ``y(t)`` to a
-    step from ``start`` to ``target``; ``band`` is the settling band as a fraction of the step
-    (2 % by default). Settling time is ``inf`` if the response never stays in the band."""
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    step = target - start
-    if step == 0 or len(t) != len(y) or len(t) < 10:
-        raise ValueError(f"step_metrics: need a non-zero step and >= 10 matching samples (step {step}, {len(t)})")
-    e = (y - target) / step  # 0 at the target, -1 at the start
-    outside = np.flatnonzero(np.abs(e) > band)
-    if not len(outside):
-        settle = 0.0
-    elif outside[-1] == len(t) - 1:
-        settle = math.inf
-    else:
-        settle = float(t[outside[-1] + 1] - t[0])
-    frac = 1.0 + e  # 0 at start, 1 at target
-    overshoot = float(max(0.0, frac.max() - 1.0))
-    tail = max(1, len(t) // 10)
-    static = float(np.mean(y[-tail:]) - target)
-    i10 = np.flatnonzero(frac >= 0.1)
-    i90 = np.flatnonzero(frac >= 0.9)
-    rise = float(t[i90[0]] - t[i10[0]]) if len(i10) and len(i90) else math.inf
-    return StepMetrics(settle, overshoot, static, rise)
-
-
-@dataclass
-class Recording:
-    """One run, sampled at every servo tick.
-
-    ``desired`` the wanted pen pose (arm frame x, y, z cm, phi rad), ``q_ref`` the IK'd joint
-    targets, ``q_enc`` the joint angles the arm believes (encoders + offsets), ``q_true`` the
-    links' true angles, ``torque`` the servo torques (N cm), ``tip`` the true pen pose,
-    ``contact`` the board's push on the tool (N), ``tool``/``stroke``/``hold`` from the
-    trajectory. :attr:`fk_enc` is the tip where the arm believes it is.
-    """
-
-    arm: WritingArm
-    dt: float
-    desired: np.ndarray
-    q_ref: np.ndarray
-    q_enc: np.ndarray
-    q_true: np.ndarray
-    torque: np.ndarray
-    tip: np.ndarray
-    contact: np.ndarray
-    tool: np.ndarray
-    stroke: np.ndarray
-    hold: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.desired)
-
-    @property
-    def duration_s(self) -> float:
-        return len(self.desired) * self.dt
-
-    @property
-    def t(self) -> np.ndarray:
-        return np.arange(len(self.desired)) * self.dt
-
-    @property
-    def fk_enc(self) -> np.ndarray:
-        return self.arm.fk(self.q_enc)
-
-    @property
-    def fk_ref(self) -> np.ndarray:
-        return self.arm.fk(self.q_ref)
-
-    def drawing(self) -> np.ndarray:
-        """Mask of samples where a tool was meant to touch and the pose was moving."""
-        return (self.tool != TOOL_NONE) & ~self.hold
-
-    def static_samples(self) -> np.ndarray:
-        """Mask of the last third of every hold (dwell): the settled samples."""
-        out = np.zeros(len(self.hold), bool)
-        h = np.concatenate([[False], self.hold, [False]]).astype(np.int8)
-        starts, ends = np.flatnonzero(np.diff(h) == 1), np.flatnonzero(np.diff(h) == -1)
-        for a, b in zip(starts, ends):
-            out[a + 2 * (b - a) // 3:b] = True
-        return out
-
-    def errors_mm(self, tip: np.ndarray | None = None) -> dict[str, float]:
-        """Static and dynamic error of the true tip (or ``tip``, e.g. :attr:`fk_enc`) against
-        the desired pose, in mm: board-plane distance (``xy``) and per axis; ``*_rms`` and
-        ``*_max`` over the settled hold samples (static) and the drawing samples (dynamic)."""
-        out: dict[str, float] = {}
-        d = ((self.tip if tip is None else tip)[:, :3] - self.desired[:, :3]) * 10.0
-        for kind, m in (("static", self.static_samples()), ("dynamic", self.drawing())):
-            if not m.any():
-                continue
-            dx = d[m]
-            xy = np.hypot(dx[:, 0], dx[:, 1])
-            out[f"{kind}_xy_rms"] = float(np.sqrt(np.mean(xy * xy)))
-            out[f"{kind}_xy_max"] = float(xy.max())
-            for i, ax in enumerate("xyz"):
-                out[f"{kind}_{ax}_rms"] = float(np.sqrt(np.mean(dx[:, i] ** 2)))
-                out[f"{kind}_{ax}_max"] = float(np.abs(dx[:, i]).max())
-        return out
-
-    @property
-    def peak_torque_ratio(self) -> np.ndarray:
-        """Per joint: the largest |torque| over the servo's limit."""
-        lim = np.asarray(self.arm.max_torque, float)
-        return np.abs(self.torque).max(axis=0) / lim if len(self.torque) else np.zeros(4)
-
-
-def _joint_params(cfg: dict, arm: WritingArm) -> list[JointParams]:
-    out = []
-    for j, jc in enumerate(cfg["joints"]):
-        lo, hi = (float(v) for v in arm.limits[j])
-        out.append(JointParams(
-            kp=jc["kp_per_s"], kv=jc["kv_ncm_s"], ki=jc["ki_ncm"], max_speed=math.radians(jc["max_speed_deg_s"]),
-            rotor_inertia=jc["rotor_inertia_kgcm2"], friction=jc["friction_ncm"],
-            backlash=math.radians(jc["backlash_deg"]), encoder_step=math.radians(jc["encoder_step_deg"]),
-            absolute=bool(jc["absolute"]), index=math.radians(jc["index_deg"]), homing_dir=int(jc["homing_dir"]) or 1,
-            homing_sweep=math.radians(jc["homing_sweep_deg"]), homing_speed=math.radians(jc["homing_speed_deg_s"]),
-            max_torque=float(arm.max_torque[j]), lo=lo, hi=hi))
-    return out
-
-
-class _Physics:
-    """The pymunk space: yaw plane and reach plane (see the module docstring)."""
-
-    def __init__(self, arm: WritingArm, joints: list[JointParams], base_inertia: float, q0: Sequence[float],
-                 motor_offset: Sequence[float]) -> None:
-        self.arm = arm
-        space = pymunk.Space()
-        space.gravity = (0.0, -_G)
-        space.iterations = 20
-        self.space = space
-        static = space.static_body
-        a, b, t = arm.upper_arm, arm.forearm, arm.tool
-        lengths = (a, b, t)
-        masses = arm.mass
-        self.lengths, self.masses = lengths, masses
-        self.base_inertia = base_inertia
-        q1, q2, q3, q4 = (float(v) for v in q0)
-        # --- reach plane: x = horizontal reach r, y = height z
-        shoulder = (0.0, arm.shoulder_height)
-        psi = [q2 + arm.pitch_offset]
-        psi.append(psi[0] + q3)
-        psi.append(psi[1] + q4)
-        links, pivots = [], []
-        p = shoulder
-        for L, m, ang in zip(lengths, masses, psi):
-            body = pymunk.Body(m, m * L * L / 12.0)
-            c, s = math.cos(ang), math.sin(ang)
-            body.position = (p[0] + 0.5 * L * c, p[1] + 0.5 * L * s)
-            body.angle = ang
-            links.append(body)
-            pivots.append(p)
-            p = (p[0] + L * c, p[1] + L * s)
-        # --- yaw plane: a body turning about a pivot far from the reach plane's bodies
-        yaw_centre = (10_000.0, 0.0)
-        yaw = pymunk.Body(1.0, 1.0)
-        yaw.position = yaw_centre
-        yaw.angle = q1
-        self.yaw, self.links = yaw, links
-        space.add(yaw, *links)
-        space.add(pymunk.PivotJoint(static, yaw, yaw_centre))
-        parents = [static, static, links[0], links[1]]
-        children = [yaw, links[0], links[1], links[2]]
-        anchors = [yaw_centre, *pivots]
-        space.add(pymunk.PivotJoint(static, links[0], pivots[0]),
-                  pymunk.PivotJoint(links[0], links[1], pivots[1]),
-                  pymunk.PivotJoint(links[1], links[2], pivots[2]))
-        zero = [0.0, arm.pitch_offset, 0.0, 0.0]  # child angle - parent angle = q + zero
-        self.zero = zero
-        self.parents, self.children, self.rotors = parents, children, []
-        for j, jp in enumerate(joints):
-            rotor = pymunk.Body(_ROTOR_MASS, jp.rotor_inertia)
-            rotor.position = anchors[j]
-            # the motor starts turned by motor_offset relative to its link inside the play
-            rotor.angle = children[j].angle - motor_offset[j]
-            space.add(rotor)
-            space.add(pymunk.PivotJoint(parents[j], rotor, anchors[j]))
-            space.add(pymunk.RotaryLimitJoint(rotor, children[j], -0.5 * jp.backlash, 0.5 * jp.backlash))
-            space.add(pymunk.RotaryLimitJoint(parents[j], children[j], jp.lo + zero[j] - _STOP_MARGIN,
-                                              jp.hi + zero[j] + _STOP_MARGIN))
-            if jp.friction > 0:
-                fr = pymunk.SimpleMotor(parents[j], rotor, 0.0)
-                fr.max_force = jp.friction * _NCM
-                space.add(fr)
-            self.rotors.append(rotor)
-        self.update_yaw_inertia()
-
-    # ------------------------------------------------------------------ state
-    def q_true(self) -> list[float]:
-        c, p, z = self.children, self.parents, self.zero
-        return [c[j].angle - p[j].angle - z[j] for j in range(4)]
-
-    def q_motor(self) -> list[float]:
-        r, p, z = self.rotors, self.parents, self.zero
-        return [r[j].angle - p[j].angle - z[j] for j in range(4)]
-
-    def tip_plane(self) -> tuple[float, float, float, float, float]:
-        """Reach-plane tip (r, z), its velocity (vr, vz) and the tool's angle from horizontal."""
-        tool = self.links[2]
-        local = (0.5 * self.lengths[2], 0.0)
-        p = tool.local_to_world(local)
-        v = tool.velocity_at_local_point(local)
-        return p.x, p.y, v.x, v.y, tool.angle
-
-    def update_yaw_inertia(self) -> None:
-        """The yaw body's moment: turntable + every link about the base axis at this reach."""
-        lf2 = self.arm.lateral_offset ** 2
-        J = self.base_inertia
-        for body, L, m in zip(self.links, self.lengths, self.masses):
-            r = body.position.x
-            c = math.cos(body.angle)
-            J += m * (r * r + lf2 + L * L * c * c / 12.0)
-        self.yaw.moment = J
 
 
 class ArmSim:
@@ -370,11 +107,12 @@ class ArmSim:
 
     def __init__(self, arm: str | Path = "thesis_rrrr", seed: int | None = None, homing: bool = False,
                  canvas: BoardCanvas | None = None, px_per_cm: float = 16.0) -> None:
-        self.arm = WritingArm.from_config(arm)
-        cfg = _configs.load("arms", arm, ARM_SCHEMA)["sim"]
+        whole = _configs.load("arms", arm, ARM_SCHEMA)  # the file is read once, for the arm and its sim
         self._source = str(_configs.resolve("arms", arm))
+        self.arm = WritingArm.from_dict(whole, self._source)
+        cfg = _configs.validate(whole["sim"], ARM_SIM_SCHEMA, self._source, prefix="sim")
         self.cfg = cfg
-        self.joints = _joint_params(cfg, self.arm)
+        self.joints = joint_params(cfg, self.arm)
         self.layout = BoardLayout.from_section(cfg["board"])
         pen_phi = -0.5 * math.pi - self.arm.pitch_offset  # the tool pointing straight down
         self.spec = DrawingSpec.from_sim(cfg, pen_phi=pen_phi, sponge_phi=pen_phi + 0.5 * math.pi)
@@ -422,7 +160,7 @@ class ArmSim:
             spread = math.radians(self.cfg["start_spread_deg"])
             q0 = q0 + np.where(rel, self.np_random.uniform(-spread, spread, 4), 0.0)
             q0 = np.clip(q0, self.arm.limits[:, 0] + 0.02, self.arm.limits[:, 1] - 0.02)
-        self.phys = _Physics(self.arm, self.joints, self.cfg["base_inertia_kgcm2"], q0, [0.0] * 4)
+        self.phys = ArmPhysics(self.arm, self.joints, self.cfg["base_inertia_kgcm2"], q0, [0.0] * 4)
         motor0 = np.asarray(self.phys.q_motor())
         # encoder counts from 0 at power-on (relative) or reads the motor angle (absolute)
         self._enc_zero = np.where(rel, motor0, 0.0)
@@ -795,69 +533,3 @@ class ArmSim:
     def __getstate__(self) -> dict[str, Any]:
         raise TypeError("ArmSim holds a pymunk space mid-motion and does not pickle; rebuild it and replay "
                         "(the TicTacToeDraw env pickles by replaying its actions)")
-
-
-def view_box(sim: ArmSim) -> tuple[float, float, float, float]:
-    """The arm-frame box ``(x0, x1, y0, y1)`` cm that :meth:`ArmSim.render` shows: the canvas
-    and the base; image pixel ``(u, v)`` at ``scale`` is arm point ``(x0 + u / scale, y1 - v / scale)``."""
-    ox, oy = sim.layout.canvas_origin
-    w_cm, h_cm = sim.layout.canvas_size
-    bx, by = sim.arm.base_xy
-    return (min(ox, bx - 4) - 1, max(ox + w_cm, bx + 4) + 1, min(oy, by - 4) - 1, max(oy + h_cm, by + 4) + 1)
-
-
-def render_arm(sim: ArmSim, scale: float, status: Sequence[str]) -> np.ndarray:
-    """Draw :meth:`ArmSim.render`'s picture (kept apart from the physics)."""
-    import cv2
-
-    lay = sim.layout
-    ox, oy = lay.canvas_origin
-    w_cm, h_cm = lay.canvas_size
-    x0, x1, y0, y1 = view_box(sim)
-    W, H = int(round((x1 - x0) * scale)), int(round((y1 - y0) * scale))
-    img = np.empty((H, W, 3), np.uint8)
-    img[...] = (205, 205, 200)
-
-    def px(p: np.ndarray) -> tuple[int, int]:
-        return int(round((p[0] - x0) * scale)), int(round((y1 - p[1]) * scale))
-
-    board = cv2.resize(sim.canvas.image(), (int(round(w_cm * scale)), int(round(h_cm * scale))),
-                       interpolation=cv2.INTER_AREA)
-    c0, r0 = px(np.array([ox, oy + h_cm]))
-    hh, ww = board.shape[:2]
-    img[max(0, r0):r0 + hh, max(0, c0):c0 + ww] = board[max(0, -r0):H - r0, max(0, -c0):W - c0][
-        : min(hh, H - max(0, r0)), : min(ww, W - max(0, c0))]
-    q = sim.q_true()
-    pts = sim.arm.joint_positions(q)
-    xy = [px(p[:2]) for p in pts]
-    cv2.circle(img, xy[0], int(0.25 * scale * 4), (90, 90, 95), -1, cv2.LINE_AA)
-    for a, b, col, wcm in ((1, 2, (200, 120, 40), 1.4), (2, 3, (220, 150, 60), 1.1), (3, 4, (120, 120, 130), 0.6)):
-        cv2.line(img, xy[a], xy[b], col, max(1, int(wcm * scale * 0.5)), cv2.LINE_AA)
-    cv2.line(img, xy[0], xy[1], (90, 90, 95), max(1, int(0.6 * scale)), cv2.LINE_AA)
-    tip_col = (200, 30, 30) if sim.contact_n > 0 else (40, 40, 40)
-    cv2.circle(img, xy[4], max(2, int(0.15 * scale)), tip_col, -1, cv2.LINE_AA)
-    cmd = sim.pose_cmd()
-    cv2.drawMarker(img, px(cmd[:2]), (20, 140, 20), cv2.MARKER_CROSS, max(6, int(0.5 * scale)), 1, cv2.LINE_AA)
-    # side view inset: the reach plane
-    iw, ih = int(W * 0.34), int(H * 0.28)
-    inset = np.empty((ih, iw, 3), np.uint8)
-    inset[...] = (245, 245, 240)
-    reach = sim.arm.upper_arm + sim.arm.forearm + sim.arm.tool
-    zs = sim.arm.shoulder_height
-    s2 = min(iw / (2.0 * reach + 4), ih / (zs + reach * 0.3 + 4))
-    ground = ih - 6
-
-    def ipx(r: float, z: float) -> tuple[int, int]:
-        return int(round(iw * 0.5 + r * s2)), int(round(ground - z * s2))
-
-    cv2.line(inset, (0, ground), (iw, ground), (120, 120, 120), 2)
-    u = np.array([math.cos(q[0] + sim.arm.yaw_offset), math.sin(q[0] + sim.arm.yaw_offset)])
-    rz = [(float(np.dot(p[:2] - np.asarray(sim.arm.base_xy), u)), float(p[2])) for p in pts]
-    for a, b in ((0, 1), (1, 2), (2, 3), (3, 4)):
-        cv2.line(inset, ipx(*rz[a]), ipx(*rz[b]), (60, 60, 70), 2, cv2.LINE_AA)
-    cv2.putText(inset, "side", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1, cv2.LINE_AA)
-    img[H - ih - 4:H - 4, W - iw - 4:W - 4] = inset
-    lines = [f"t = {sim.time_s:6.2f} s   pen force {sim.contact_n:4.2f} N", *status]
-    for i, s in enumerate(lines):
-        cv2.putText(img, s, (8, 20 + 18 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (20, 20, 20), 1, cv2.LINE_AA)
-    return img
