@@ -1,22 +1,38 @@
-"""What a climb asks of the robot: the wall as a graph of holes, starts, goals and the moves on offer.
+"""What a climb asks of the robot: walls, start and goal, the route proof, the reward, the hints.
 
-:func:`candidate_holes` (the holes an agent may choose from, a function of the stance
-alone, so that a planner and the environment offer the same moves), :func:`hop_counts` and
-:func:`stance_hops` (the map's lower bound on the moves left) and :func:`start_stances`
-(where the robot can rest at the bottom of a wall).
+The task half of HoleClimb-v0 (panda-gym's split: a task and a robot joined by a thin env).
+:class:`ClimbTask` makes walls (generated from the env's seeded generator, a fixed wall from
+``configs/walls``, or a pool of tasks made once), puts the start among the lowest holes and
+the goal in the top row, accepts a wall only if its ``route_finder`` proves a route, scores
+moves (:meth:`ClimbTask.reward`) and keeps the map's hints. The wall-graph helpers are shared
+with the planner: :func:`candidate_holes` (the holes an agent may choose from, a function of
+the stance alone, so that a planner and the environment offer the same moves),
+:func:`hop_counts` and :func:`stance_hops` (the map's lower bound on the moves left) and
+:func:`start_stances` (where the robot can rest at the bottom of a wall).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
 
 from kinegym.envs.sim.climber_model import ClimberModel
 from kinegym.envs.sim.gait import min_enclosing_circle
 from kinegym.kinematics.holes import HoleMap
 
-__all__ = ["candidate_holes", "hop_counts", "stance_hops", "start_stances"]
+__all__ = ["ClimbTask", "RouteFinder", "WALL_DEFAULTS", "candidate_holes", "hop_counts", "stance_hops",
+           "start_stances"]
+
+#: ``(model, holes, start, goal, candidates) -> moves or None``: how walls are checked for a
+#: route (``agents.gait_planner.find_route`` when made with ``gymnasium.make``).
+RouteFinder = Callable[[ClimberModel, HoleMap, Sequence[int], int, int], "list[tuple[int, int]] | None"]
+
+WALL_DEFAULTS: dict[str, Any] = {"cols": (5, 8), "rows": (8, 14), "spacing_cm": 15.0, "jitter_cm": 1.0,
+                                 "missing": 0.08}
 
 
 def candidate_holes(holes: HoleMap, stance: Sequence[int], k: int, radius: float) -> list[int]:
@@ -76,3 +92,113 @@ def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> lis
             out.append((st[0], st[1], st[2]))
     out.sort(key=lambda s: (sum(xy[h, 1] for h in s), s))
     return out
+
+
+class ClimbTask:
+    """Walls, start, goal and reward of one HoleClimb env (see the env's docstring for the
+    arguments). :meth:`new_episode` draws the next wall; afterwards ``holes``, ``start``,
+    ``goal``, ``planner_moves``, ``hops`` (hop counts to the goal, when ``hints``) and
+    ``stance_cache`` (per believed stance on this wall: candidates and action mask, kept with
+    the wall) describe it."""
+
+    def __init__(self, model: ClimberModel, robot_name: str, wall: str | HoleMap, wall_kwargs: dict[str, Any] | None,
+                 candidates: int, route_finder: RouteFinder | None, hints: bool, wall_pool: int,
+                 wall_pool_seed: int) -> None:
+        unknown = set(wall_kwargs or {}) - set(WALL_DEFAULTS)
+        if unknown:
+            raise ValueError(f"wall_kwargs {sorted(unknown)} unknown; expected keys {sorted(WALL_DEFAULTS)}")
+        if not (isinstance(wall_pool, int) and wall_pool >= 0):
+            raise ValueError(f"wall_pool={wall_pool!r}; expected an integer >= 0 (0 = a new wall every reset)")
+        if wall_pool and wall != "generated":
+            raise ValueError(f"wall_pool={wall_pool} needs wall='generated', not {wall!r}")
+        if not isinstance(wall_pool_seed, int):
+            raise ValueError(f"wall_pool_seed={wall_pool_seed!r}; expected an integer")
+        self.model, self.robot_name, self.K = model, robot_name, candidates
+        self.route_finder, self.hints = route_finder, hints
+        self.wall_pool, self.wall_pool_seed = wall_pool, wall_pool_seed
+        self.wall_kwargs = {**WALL_DEFAULTS, **(wall_kwargs or {})}
+        self.reach = float(np.max(model.geom.l1 + model.geom.l2))
+        self.fixed_wall: HoleMap | None = None
+        if isinstance(wall, HoleMap):
+            self.fixed_wall = wall
+        elif wall != "generated":
+            self.fixed_wall = HoleMap.from_config(wall)
+        # pool index -> (holes, start, goal, planner moves, hop counts, stance cache)
+        self._pool: dict[int, tuple[HoleMap, tuple[int, int, int], int, int, list[int], dict]] = {}
+        self.holes: HoleMap | None = None
+        self.stance_cache: dict[tuple[int, int, int], tuple[list[int], np.ndarray]] = {}
+        self.hops: list[int] = []
+
+    def new_episode(self, rng: np.random.Generator) -> None:
+        """The next wall, start and goal, drawn from ``rng`` (the env's ``np_random``)."""
+        if self.wall_pool:
+            i = int(rng.integers(self.wall_pool))
+            task = self._pool.get(i)
+            if task is None:
+                holes, start, goal, moves = self._make_wall(np.random.default_rng([self.wall_pool_seed, i]))
+                task = self._pool[i] = (holes, start, goal, moves, hop_counts(holes, goal, 2.0 * self.reach), {})
+            self.holes, self.start, self.goal, self.planner_moves, self.hops, self.stance_cache = task
+            return
+        previous = self.holes
+        self.holes, self.start, self.goal, self.planner_moves = self._make_wall(rng)
+        if self.holes is not previous:
+            self.stance_cache = {}
+        self.hops = hop_counts(self.holes, self.goal, 2.0 * self.reach) if self.hints else []
+
+    def reward(self, prev_dist: float, dist: float, success: bool, fell: bool) -> float:
+        """``0.05`` per cm closer to the goal, ``-0.1`` per move, ``+10`` at the goal, ``-10`` for a fall."""
+        reward = 0.05 * (prev_dist - dist) - 0.1
+        if success:
+            reward += 10.0
+        if fell:
+            reward -= 10.0
+        return float(reward)
+
+    def goal_distance(self, pose: Sequence[float]) -> float:
+        """Distance (cm) from a body pose to the goal hole."""
+        g = self.holes.xy[self.goal]  # type: ignore[union-attr]
+        return float(math.hypot(g[0] - pose[0], g[1] - pose[1]))
+
+    def _draw_range(self, key: str, rng: np.random.Generator) -> float:
+        v = self.wall_kwargs[key]
+        if isinstance(v, (tuple, list)):
+            lo, hi = v
+            if isinstance(lo, int):
+                return int(rng.integers(lo, hi + 1))
+            return float(rng.uniform(lo, hi))
+        return v
+
+    def _make_wall(self, rng: np.random.Generator) -> tuple[HoleMap, tuple[int, int, int], int, int]:
+        """A wall with a start stance, a goal hole and the route finder's route length
+        (-1 without a route finder: the wall is then not checked), all drawn from ``rng``."""
+        for _ in range(30):
+            if self.fixed_wall is not None:
+                holes = self.fixed_wall
+            else:
+                cols, rows = int(self._draw_range("cols", rng)), int(self._draw_range("rows", rng))
+                holes = HoleMap.grid(cols, rows, float(self._draw_range("spacing_cm", rng)),
+                                     float(self._draw_range("jitter_cm", rng)), float(self._draw_range("missing", rng)),
+                                     seed=int(rng.integers(2**31)), name=f"generated {cols}x{rows}")
+            starts = start_stances(self.model, holes)
+            if not starts:
+                if self.fixed_wall is not None:
+                    break
+                continue
+            start = starts[int(rng.integers(min(len(starts), 12)))]
+            ys = holes.xy[:, 1]
+            top = np.flatnonzero(ys >= ys.max() - 0.5 * holes.spacing)
+            first = int(rng.integers(len(top)))
+            goals = [int(top[first])] + ([int(g) for g in top if int(g) != int(top[first])]
+                                         if self.fixed_wall is not None else [])
+            for goal in goals:  # a fixed wall: the other top holes before giving up
+                if self.route_finder is None:
+                    return holes, start, goal, -1
+                route = self.route_finder(self.model, holes, start, goal, self.K)
+                if route is not None:
+                    return holes, start, goal, len(route)
+            if self.fixed_wall is not None:
+                break
+        name = getattr(self.fixed_wall, "name", "generated")
+        raise RuntimeError(f"no route from the bottom to the top of wall '{name}' for robot '{self.robot_name}' "
+                           f"(reach {self.reach:g} cm, spacing {(self.fixed_wall or holes).spacing:.1f} cm); "
+                           f"a longer-armed robot (robot='climber_long') or a denser wall is needed")

@@ -258,3 +258,21 @@ def test_wall_pool_reuses_fixed_tasks_and_stays_deterministic() -> None:
         HoleClimbEnv(wall_pool=-1)
     with pytest.raises(ValueError, match="needs wall='generated'"):
         HoleClimbEnv(wall="seed_4x4", wall_pool=4)
+
+
+def test_observation_layout_is_the_documented_table() -> None:
+    """The builder fills the parts the docstring's table names, at the sizes it states."""
+    from kinegym.envs import hole_climb
+
+    for memory, hints, total in ((False, False, 68), (True, False, 93), (True, True, 142)):
+        lay = hole_climb.observation_layout(8, memory, hints)
+        assert next(reversed(lay.values())).stop == total
+        assert f"{total}" in hole_climb.__doc__
+        env = HoleClimbEnv(memory=memory, hints=hints)
+        assert env.observation_space.shape == (total,)
+        for name in lay:
+            assert f"`{name}`" in hole_climb.__doc__, name
+        starts = [p.start for p in lay.values()]
+        assert starts == sorted(starts) and starts[0] == 0
+    obs, info = env.reset(seed=4)
+    assert np.array_equal(obs[lay["action_mask"]], info["action_mask"].astype(np.float32))
