@@ -458,6 +458,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
     ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.policies import MaskedPolicyAgent
+    from kinegym.agents.rollout import run_episode
 
     if walls not in ("held-out", "validation"):
         raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
@@ -474,21 +475,9 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
         results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
         for i in range(episodes):
             for name in ("planner", "policy"):
-                agent = PlannerAgent() if name == "planner" else pol
-                obs, info = env.reset(seed=base + i)
-                done, falls, moves, think = False, 0, 0, []
-                while not done:
-                    t0 = time.perf_counter()
-                    a = agent.act(env.unwrapped, obs)
-                    think.append(time.perf_counter() - t0)
-                    if a is None:
-                        break
-                    obs, r, term, trunc, info = env.step(a)
-                    falls += info["outcome"] == "fell"
-                    moves += 1
-                    done = term or trunc
-                results[name].append({"success": bool(info["is_success"]), "falls": falls, "moves": moves,
-                                      "think": float(np.median(think)) if think else 0.0})
+                ep = run_episode(env, PlannerAgent() if name == "planner" else pol, seed=base + i)
+                results[name].append({"success": ep.success, "falls": ep.falls, "moves": ep.moves,
+                                      "think": float(np.median(ep.think_s)) if ep.think_s else 0.0})
             if progress:
                 progress()
         env.close()

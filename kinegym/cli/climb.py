@@ -36,6 +36,7 @@ def cmd_climb(args: argparse.Namespace) -> int:
     import gymnasium as gym
 
     import kinegym  # noqa: F401  (registers the ids)
+    from kinegym.agents.rollout import run_episode
     from kinegym.envs.draw import save_gif
     from kinegym.progress import Progress
 
@@ -56,26 +57,12 @@ def cmd_climb(args: argparse.Namespace) -> int:
     rows, frames = [], []
     t0 = time.perf_counter()
     with Progress(args.episodes, f"climb ({args.policy}, {args.mode})", enabled=not args.json) as bar:
-        for ep in range(args.episodes):
-            obs, info = env.reset(seed=args.seed + ep)
-            done, ret, tic = False, 0.0, time.perf_counter()
-            falls = 0
-            if args.gif and ep == 0:
-                frames.append(env.render())
-            while not done:
-                a = agent.act(env.unwrapped, obs)
-                if a is None:  # the planner proves it cannot get on from here
-                    break
-                obs, r, term, trunc, info = env.step(a)
-                ret += r
-                falls += info["outcome"] == "fell"
-                done = term or trunc
-                if args.gif and ep == 0:
-                    frames.append(env.render())
-            rows.append({"episode": ep, "seed": args.seed + ep, "success": bool(info["is_success"]),
-                         "moves": int(info["moves"]), "planner_moves": int(info["planner_moves"]),
-                         "falls": falls, "return": round(ret, 3), "wall": info["wall"],
-                         "seconds": time.perf_counter() - tic})
+        for i in range(args.episodes):
+            ep = run_episode(env, agent, seed=args.seed + i, frames=bool(args.gif) and i == 0)
+            frames += ep.frames
+            rows.append({"episode": i, "seed": args.seed + i, "success": ep.success, "moves": ep.moves,
+                         "planner_moves": int(ep.info["planner_moves"]), "falls": ep.falls,
+                         "return": round(ep.ret, 3), "wall": ep.info["wall"], "seconds": ep.seconds})
             bar.update()
     secs = time.perf_counter() - t0
     gif = str(save_gif(frames, args.gif, env.unwrapped.metadata["render_fps"])) if args.gif else None

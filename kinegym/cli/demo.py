@@ -119,20 +119,12 @@ def _demo_climb(out: Path) -> dict[str, Any]:
 
     import kinegym  # noqa: F401
     from kinegym.agents.gait_planner import PlannerAgent
+    from kinegym.agents.rollout import run_episode
     from kinegym.envs.draw import save_gif
 
     env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array")
-    obs, info = env.reset(seed=1)
-    agent = PlannerAgent()
-    frames = [env.render()]
-    done = False
-    while not done:
-        a = agent.act(env.unwrapped, obs)
-        if a is None:
-            break
-        obs, r, term, trunc, info = env.step(a)
-        frames.append(env.render())
-        done = term or trunc
+    ep = run_episode(env, PlannerAgent(), seed=1, frames=True)
+    frames, info = ep.frames, ep.info
     gif = save_gif(frames, out / "climb.gif", env.unwrapped.metadata["render_fps"])
     from kinegym.envs.draw import save_rgb
 
