@@ -84,3 +84,24 @@ def test_generated_closed_form_ik_equals_the_reference(name: str) -> None:
             assert fast is None
             continue
         np.testing.assert_allclose(fast, ref, atol=1e-12)
+
+
+def test_compiled_dh_fk_equals_the_product_of_dh_matrices() -> None:
+    """The straight-line FK (floats and arrays) is the textbook product of DH transforms."""
+    from kinegym.kinematics import DHChain, DHLink
+
+    branched = DHChain([DHLink(a=5.0, joint=0), DHLink(d=2.0, a=3.0, alpha=0.7, joint=1, name="elbow"),
+                        DHLink(a=1.5, theta=0.3, kind="P", joint=2), DHLink(a=4.0, alpha=-1.1, kind="F"),
+                        DHLink(a=2.0, joint=3, scale=-2.0, parent=1, name="side")],
+                       base=np.array([[0, -1, 0, 1.0], [1, 0, 0, 2.0], [0, 0, 1, 0.5], [0, 0, 0, 1]]))
+    rng = np.random.default_rng(9)
+    for chain in (ARMS["pincher"].dh_chain(), ARMS["thesis_rrrr"].dh_chain(), branched):
+        qs = rng.uniform(-2.0, 2.0, (50, chain.n_joints))
+        batch = chain.fk(qs)
+        for q, pose in zip(qs, batch):
+            for frame in range(chain.n_frames):
+                ref = chain.fk_reference(q, frame)
+                np.testing.assert_allclose(chain.fk(q, frame), ref, atol=1e-12)
+                fast = chain.fk_fast(*q, frame=frame)
+                np.testing.assert_allclose(np.array(fast[9:]), ref[:3, 3], atol=1e-12)
+            np.testing.assert_allclose(pose, chain.fk_reference(q), atol=1e-12)
