@@ -24,7 +24,7 @@ FORBIDDEN_IN_PURE = ("pymunk", "gymnasium", "pygame", "tkinter", "PySide6", "PyQ
                      "sb3_contrib", "torch")
 #: files allowed past ~600 lines, each with the reason the README's architecture section gives
 LONG_FILES: dict[str, str] = {}
-MAX_LINES = 620
+MAX_LINES = 600
 
 
 def _modules() -> dict[str, Path]:
