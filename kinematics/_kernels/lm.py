@@ -20,6 +20,7 @@ __all__ = ["solve_spd", "chol_lines", "dense_kernel", "lm_attempt", "DENSE_MAX"]
 
 Residual = Callable[[list[float]], tuple[list[float], list[list[float]]]]
 
+
 def solve_spd(a: list[list[float]], b: list[float]) -> list[float]:
     """Solve a small symmetric positive-definite system by Cholesky (plain Python)."""
     n = len(b)
@@ -56,7 +57,7 @@ def solve_spd(a: list[list[float]], b: list[float]) -> list[float]:
 # the damped system; ``solve(data, dl)`` returns the step for the damping ``dl = lambda^2``.
 # For m >= n the system is the normal one, ``(J^T J + dl I) dq = J^T e`` (n x n); for m < n
 # it is the equivalent ``dq = J^T (J J^T + dl I)^-1 e`` (m x m, the push-through identity,
-# seed 003's form), which is smaller. Cholesky as in :func:`_solve_spd`.
+# seed 003's form), which is smaller. Cholesky as in :func:`solve_spd`.
 DENSE_MAX = 6
 _dense_kernels: dict[tuple[int, int], tuple[Callable, Callable]] = {}
 
