@@ -14,18 +14,26 @@ Model (lengths in cm, angles in radians)::
     r     = A cos psi_A + B cos psi_B + T cos psi_T
     (x, y) = base_xy + r u + lateral_offset v
     z     = shoulder_height + A sin psi_A + B sin psi_B + T sin psi_T
-    phi   = q2 + q3 + q4                         (pen pitch in the arm's own convention)
+    psi_W = psi_T if r >= 0 else pi - psi_T     (the pen's pitch in the world, see below)
+    phi   = psi_W - pitch_offset
 
-For the Pincher ``phi = -pi/2`` points the pen straight down; for the RRRR arm (pitch
-offset -90 deg) ``phi = 0`` does, as in the thesis (eq. 3.25).
+The pen pose is a world-frame quantity, as seed 002 defines it: ``phi`` is the pitch of the
+tool in the vertical plane through the base axis and the target, measured from the
+*outward* horizontal (away from the base axis), less the arm's own zero ``pitch_offset``.
+An arm facing its target (``r >= 0``) has ``phi = q2 + q3 + q4``; one reaching back over its
+base (``r < 0``) points the pen the other way round, ``phi = pi - (q2 + q3 + q4) - 2
+pitch_offset``. For the Pincher ``phi = -pi/2`` points the pen straight down and ``phi = 0``
+horizontally outward; for the RRRR arm (pitch offset -90 deg) ``phi = 0`` is down, as in the
+thesis (eq. 3.25). (With the RRRR arm's sideways pen offset the pen lies in the links'
+vertical plane, parallel to the plane through the base axis; ``phi`` is its pitch there.)
 
 Inverse kinematics (:meth:`WritingArm.ik_all`) returns four branches: the arm facing the
 target or reaching back over its base (yaw + pi, ``r < 0``), each with the elbow on
-either side. Every branch reproduces ``(x, y, z, phi)`` through :meth:`WritingArm.fk`
-(checked by round-trip tests). :meth:`WritingArm.ik` picks the branch inside the joint
+either side. Every branch reproduces the tip ``(x, y, z)`` and the world pen pitch ``phi``
+through :meth:`WritingArm.fk` (checked by round-trip tests, also against the wrist-to-tip
+direction). :meth:`WritingArm.ik` picks the branch inside the joint
 limits nearest the current pose (seed 002's ``findOptimalSolution``, with its errors
-fixed: seed 002's branch rows 3 and 4 flip the signs of ``q3``/``q4`` and do not
-reproduce their targets).
+fixed: seed 002's branch row 3 flips the signs of ``q3``/``q4`` and misses its target).
 
 Servo convention: a real arm's servos may count from another zero and in the other
 direction: ``servo = sign * q + offset`` (Pincher: signs ``(+1, -1, -1, -1)``, offsets
@@ -210,7 +218,9 @@ class WritingArm:
         lf = self.lateral_offset
         x = self.base_xy[0] + r * c + lf * s
         y = self.base_xy[1] + r * s - lf * c
-        phi = np.mod(q2 + q3 + q4 + np.pi, TWO_PI) - np.pi
+        rel = q2 + q3 + q4
+        rel = np.where(r >= 0, rel, (np.pi - 2 * self.pitch_offset) - rel)  # world pitch: see the module docstring
+        phi = np.mod(rel + np.pi, TWO_PI) - np.pi
         phi = np.where(phi == -np.pi, np.pi, phi)
         return np.stack([x, y, z, phi], axis=-1)
 
@@ -225,8 +235,8 @@ class WritingArm:
         yaw = q1 + self.yaw_offset
         c, s = math.cos(yaw), math.sin(yaw)
         lf = self.lateral_offset
-        return (self.base_xy[0] + r * c + lf * s, self.base_xy[1] + r * s - lf * c, z,
-                _wrap(q2 + q3 + q4))
+        rel = q2 + q3 + q4 if r >= 0 else (math.pi - 2 * self.pitch_offset) - (q2 + q3 + q4)
+        return (self.base_xy[0] + r * c + lf * s, self.base_xy[1] + r * s - lf * c, z, _wrap(rel))
 
     def joint_positions(self, q: object) -> np.ndarray:
         """World positions of base, shoulder, elbow, wrist and pen tip: ``(..., 5, 3)``."""
@@ -276,7 +286,7 @@ class WritingArm:
         jac[..., 0, 1:] = dr * c[..., None]
         jac[..., 1, 1:] = dr * s[..., None]
         jac[..., 2, 1:] = dz
-        jac[..., 3, 1:] = 1.0
+        jac[..., 3, 1:] = np.where(r >= 0, 1.0, -1.0)[..., None]  # world pitch turns round when reaching back
         return jac
 
     def task_one(self, q: list[float]) -> tuple[list[float], list[list[float]]]:
@@ -293,13 +303,15 @@ class WritingArm:
         c, s = math.cos(yaw), math.sin(yaw)
         lf = self.lateral_offset
         d2, d3, d4 = -(sa + sb + st), -(sb + st), -st
+        sign = 1.0 if r >= 0 else -1.0  # world pitch: the pen turns round when the arm reaches back
+        rel = q2 + q3 + q4 if r >= 0 else (math.pi - 2 * self.pitch_offset) - (q2 + q3 + q4)
         f = [self.base_xy[0] + r * c + lf * s, self.base_xy[1] + r * s - lf * c,
-             self.shoulder_height + sa + sb + st, q2 + q3 + q4]
+             self.shoulder_height + sa + sb + st, rel]
         jac = [
             [-r * s + lf * c, d2 * c, d3 * c, d4 * c],
             [r * c + lf * s, d2 * s, d3 * s, d4 * s],
             [0.0, ca + cb + ct, cb + ct, ct],
-            [0.0, 1.0, 1.0, 1.0],
+            [0.0, sign, sign, sign],
         ]
         return f, jac
 
@@ -401,11 +413,13 @@ class WritingArm:
         unreachable = []
         for reach in (0, 1):
             r = rho if reach == 0 else -rho
+            # reaching back, the same world pitch is pi - psi_t in the arm's plane (cos flips, sin stays)
+            psi_arm = psi_t if reach == 0 else np.pi - psi_t
             base = 7 * reach
             yaw = rows[base]
             np.arctan2(lf, r, out=yaw)
             yaw += bearing
-            rw = r - tc_
+            rw = r - tc_ if reach == 0 else r + tc_
             cos3 = rw * rw
             cos3 += zz
             cos3 -= aa
@@ -430,7 +444,7 @@ class WritingArm:
                     np.negative(q3m, out=rows[k + 1])
                 else:
                     rows[k + 1] = q3m
-                d = np.subtract(psi_t, psi_a, out=rows[k + 2])
+                d = np.subtract(psi_arm, psi_a, out=rows[k + 2])
                 d -= rows[k + 1]
         # wrap each joint into [lo, lo + 2 pi) as lo + np.mod(v - lo, 2 pi) (np.mod is
         # fmod plus 2 pi where the remainder is negative, -0.0 -> +0.0), then back to the
@@ -472,8 +486,9 @@ class WritingArm:
         twoab = 2 * a * b
         base2 = zw * zw - a * a - b * b
         out: list[tuple[float, ...] | None] = []
-        for r in (rho, -rho):
-            rw = r - tl * ct
+        # reaching back, the same world pitch is pi - psi_t in the arm's plane (cos flips, sin stays)
+        for r, tc, psi_arm in ((rho, tl * ct, psi_t), (-rho, -tl * ct, math.pi - psi_t)):
+            rw = r - tc
             c3 = (rw * rw + base2) / twoab
             if c3 > 1.0 or c3 < -1.0:
                 if abs(c3) > 1 + 1e-12:
@@ -487,7 +502,7 @@ class WritingArm:
             ks = b * s3
             for q3, k_s in ((-math.acos(c3), -ks), (math.acos(c3), ks)):
                 psi_a = base_ang - math.atan2(k_s, k_c)
-                out.append((q1, psi_a - self.pitch_offset, q3, psi_t - psi_a - q3))
+                out.append((q1, psi_a - self.pitch_offset, q3, psi_arm - psi_a - q3))
         return out
 
     def ik_fast(

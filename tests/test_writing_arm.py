@@ -17,6 +17,18 @@ def _wrap(a: np.ndarray) -> np.ndarray:
     return np.mod(a + math.pi, 2 * math.pi) - math.pi
 
 
+def world_phi(arm: WritingArm, q: np.ndarray) -> np.ndarray:
+    """The pen pitch read off the geometry alone, as seed 002 defines it: the wrist-to-tip
+    direction's elevation, measured from the horizontal that points away from the base axis
+    (through the tip), less the arm's own zero. Independent of :meth:`WritingArm.fk`'s formula."""
+    pts = arm.joint_positions(q)
+    d = pts[..., 4, :] - pts[..., 3, :]
+    out = pts[..., 4, :2] - np.asarray(arm.base_xy)
+    outward = np.where(np.sum(d[..., :2] * out, axis=-1) >= -1e-12, 1.0, -1.0)
+    pitch = np.arctan2(d[..., 2], outward * np.hypot(d[..., 0], d[..., 1]))
+    return _wrap(pitch - arm.pitch_offset)
+
+
 @pytest.mark.parametrize("name", sorted(ARMS))
 @given(seed=st.integers(0, 2**32 - 1))
 def test_every_branch_reproduces_its_target(name: str, seed: int) -> None:
@@ -31,6 +43,10 @@ def test_every_branch_reproduces_its_target(name: str, seed: int) -> None:
     err_phi = np.abs(_wrap(f[..., 3] - target[:, None, 3]))
     assert np.where(reachable, err_pos, 0).max() < 1e-9
     assert np.where(reachable, err_phi, 0).max() < 1e-9
+    # ... and the pen really points that way in the world (read off the geometry, every branch)
+    err_dir = np.abs(_wrap(world_phi(arm, np.where(reachable[..., None], qs, 0.0)) - target[:, None, 3]))
+    assert np.where(reachable, err_dir, 0).max() < 1e-9
+    np.testing.assert_allclose(world_phi(arm, q), target[:, 3], atol=1e-9)
     # the configuration we started from is one of the branches
     dq = np.abs(_wrap(qs - q[:, None, :])).max(axis=-1)
     assert (np.nanmin(dq, axis=1) < 1e-6).all()
@@ -48,6 +64,7 @@ def test_ik_nearest_branch_and_scalar_paths(name: str) -> None:
         np.testing.assert_allclose(near, q, atol=1e-7)  # nearest to where we are: where we are
         first = arm.ik(t)
         np.testing.assert_allclose(arm.fk(first)[:3], t[:3], atol=1e-9)
+        assert abs(_wrap(world_phi(arm, first) - t[3])) < 1e-9
         assert arm.within_limits(first)
         fast = arm.ik_fast(*t.tolist(), tuple(q))
         np.testing.assert_allclose(fast, near, atol=1e-12)
@@ -70,8 +87,12 @@ def test_ik_errors() -> None:
         tight.ik([15, 0, 7, -math.pi / 2])
 
 
-def test_seed002_task62_tables_only_rows_1_2_are_right() -> None:
-    # seed 002 task 6.2 printed findJointAngles (servo convention, phi = 0)
+def test_seed002_task62_rows_1_2_4_are_physical_row_3_is_a_sign_error() -> None:
+    """Seed 002 task 6.2 printed findJointAngles (servo convention, phi = 0: pen horizontal,
+    pointing outward). Rows 1, 2 (facing the target) and 4 (reaching back over the base) reach
+    the point with the pen outward; row 1 lies outside the +-150 deg servo limits; row 3 flips
+    the signs of q3 / q4 and misses the point by 18-39 cm. Our four branches are rows 1, 2, 4
+    and row 3 done right."""
     tables = {
         (-13, -13, 4): [[-0.7854, 3.2931, -1.7297, 0.0074], [-0.7854, 1.5856, 1.7297, -1.7444],
                         [2.3562, -3.2931, -1.7297, -0.0074], [2.3562, -1.5856, -1.7297, 1.7444]],
@@ -84,17 +105,40 @@ def test_seed002_task62_tables_only_rows_1_2_are_right() -> None:
     }
     arm = ARMS["pincher"]
     for target, rows in tables.items():
-        f = arm.fk(arm.from_servo(np.array(rows)))
+        q = arm.from_servo(np.array(rows))
+        f = arm.fk(q)
         miss = np.linalg.norm(f[:, :3] - np.array(target), axis=1)
-        assert (miss[:2] < 2e-3).all()          # rows 1, 2: right to the printed 4 decimals
-        assert np.abs(_wrap(f[:2, 3])).max() < 1e-3
-        assert miss[2] > 10                      # row 3: misses the point by 18-39 cm
-        assert miss[3] < 2e-3 and abs(abs(f[3, 3]) - math.pi) < 1e-3  # row 4: pen reversed
-        # our four branches all hit (x, y, z, phi = 0)
+        valid = [0, 1, 3]
+        assert (miss[valid] < 2e-3).all()            # rows 1, 2, 4: right to the printed 4 decimals
+        assert np.abs(_wrap(f[valid, 3])).max() < 1e-3 and np.abs(world_phi(arm, q[valid])).max() < 1e-3
+        assert miss[2] > 10                          # row 3: a sign error
+        assert not arm.within_limits(q[0])           # row 1: beyond the servo limits
+        # our four branches all hit (x, y, z, phi = 0), pen outward; rows 1, 2, 4 are among them
         qs, ok, _ = arm.ik_all([*target, 0.0])
-        g = arm.fk(qs[ok])
-        np.testing.assert_allclose(g[:, :3], np.broadcast_to(target, (ok.sum(), 3)), atol=1e-9)
+        assert ok.all()
+        g = arm.fk(qs)
+        np.testing.assert_allclose(g[:, :3], np.broadcast_to(target, (4, 3)), atol=1e-9)
         np.testing.assert_allclose(_wrap(g[:, 3]), 0, atol=1e-9)
+        np.testing.assert_allclose(world_phi(arm, qs), 0, atol=1e-9)
+        for row in np.array(rows)[valid]:
+            assert np.abs(_wrap(arm.to_servo(qs) - row)).max(axis=1).min() < 2e-3
+
+
+def test_an_impossible_pen_pose_is_refused_not_mislabelled() -> None:
+    """At (-5, 4, 10) with the pen horizontal outward, the old joint-relative pitch returned
+    a pose whose pen pointed back at the base. Whatever ik() returns now points outward."""
+    arm = ARMS["pincher"]
+    for target in ([-5, 4, 10, 0.0], [-13, -13, 4, 0.0], [13, -5, 4, 0.0], [10, 12, 6, 0.0]):
+        try:
+            q = arm.ik(target)
+        except JointLimitError:
+            continue
+        d = arm.pen_direction(q)
+        out = np.array(target[:2]) - np.asarray(arm.base_xy)
+        assert np.dot(d[:2], out / np.linalg.norm(out)) > 1 - 1e-9 and abs(d[2]) < 1e-9
+    # seed 002's row 4 for (-13, -13, 4): reaching back, inside the limits, pen outward
+    q = arm.ik([-13, -13, 4, 0.0], current=arm.from_servo([2.3562, -1.5856, -1.7297, 1.7444]))
+    np.testing.assert_allclose(arm.to_servo(q), [2.3562, -1.5856, -1.7297, 1.7444], atol=2e-3)
 
 
 def test_seed002_task64_optimal_solutions_are_among_our_branches() -> None:
@@ -124,7 +168,12 @@ def test_seed003_matrices_vs_printed_closed_form() -> None:
         t40 = t10 @ rx_link(q2, big_l2) @ rx_link(q3, big_l3) @ rx_link(q4, big_l4, lf)  # 3.17-3.21
         ours = arm.fk([q1, q2, q3, q4])
         np.testing.assert_allclose(ours[:3], t40[:3, 3], atol=1e-9)
-        assert math.isclose(math.atan2(t40[2, 1], t40[2, 2]), ours[3], abs_tol=1e-9)  # eq. 3.27
+        # eq. 3.27 is the joint-relative pitch: the world pitch where the arm faces its
+        # target, turned round (its own zero is pen down) where it reaches back
+        rel = math.atan2(t40[2, 1], t40[2, 2])
+        assert math.isclose(abs(_wrap(np.array(ours[3] - rel))), 0, abs_tol=1e-9) or math.isclose(
+            abs(_wrap(np.array(ours[3] + rel))), 0, abs_tol=1e-9)
+        assert abs(_wrap(world_phi(arm, np.array([q1, q2, q3, q4])) - ours[3])) < 1e-9
     # the printed eq. 3.23 (y with "- L2 cos q1 sin q2") disagrees with the matrices
     q1, q2, q3, q4 = 0.3, 0.8, -0.5, 0.2
     y_printed = (lf * math.sin(q1) - big_l2 * math.cos(q1) * math.sin(q2)

@@ -295,7 +295,8 @@ def add_parsers(sub: Any) -> None:
     ia = ik.add_parser("arm", help="pen pose -> joint angles of the writing arm (all branches)")
     ia.add_argument("--target", required=True, help="pen tip X,Y,Z in cm")
     ia.add_argument("--phi", type=float, default=-90.0,
-                    help="pen pitch q2+q3+q4 in deg (default -90: pen down on the Pincher)")
+                    help="pen pitch in deg from the outward horizontal, world frame, less the arm's zero "
+                         "(default -90: pen down on the Pincher)")
     ia.add_argument("--current", default=None, help="current joint angles Q1,Q2,Q3,Q4 in deg")
     ia.add_argument("--arm", default="pincher", help="arm config name or YAML path")
     add_json(ia)

@@ -35,7 +35,7 @@ def arm_kernel_source(arm: WritingArm, pitch: bool) -> str:
         t row: [r,  0,   0,   0 ]        r  = A cos psiA + B cos psiB + T cos psiT
         u row: [lf, -S2, -S3, -S4]       S2 = A sin psiA + S3, S3 = B sin psiB + S4, S4 = T sin psiT
         z row: [0,  r,   z3,  ct]        z3 = B cos psiB + ct, ct = T cos psiT
-        phi  : [0,  1,   1,   1 ]        (position + pitch only)
+        phi  : [0,  1,   1,   1 ]        (position + pitch only; reaching back, r < 0: -[0, 1, 1, 1])
 
     and the damped step ``dq = J^T (J J^T + dl I)^-1 e`` needs a 2x2 (position) or 3x3
     (position + pitch) solve after eliminating the t row. With a joint frozen by the active
@@ -70,7 +70,9 @@ def arm_kernel_source(arm: WritingArm, pitch: bool) -> str:
         ]
         if pitch:
             lines += [
-                f"{o}ep = remainder(gp - ({q2} + {q3} + {q4}), {TWO_PI!r})",
+                # world pitch: reaching back (r < 0) the joint sum must meet pi - gp - 2 pitch_offset
+                # (its Jacobian row is -[0, 1, 1, 1]; J^T J is the same, J^T e flips with the error)
+                f"{o}ep = remainder((gp if {o}r >= 0.0 else gb) - ({q2} + {q3} + {q4}), {TWO_PI!r})",
                 f"{o}err2 = {o}eu*{o}eu + {o}et*{o}et + {o}ez*{o}ez + {o}ep*{o}ep",
             ]
         else:
@@ -88,6 +90,7 @@ def arm_kernel_source(arm: WritingArm, pitch: bool) -> str:
         f"    X = {plus('gx', -float(arm.base_xy[0]))}",
         f"    Y = {plus('gy', -float(arm.base_xy[1]))}",
         f"    Z = {plus('gz', -float(arm.shoulder_height))}",
+        f"    gb = {math.pi - 2 * PO!r} - gp",
         *evaluate(qs, "", "    "),
         "    damp = lam",
         "    stall = 0",
