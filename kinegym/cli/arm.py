@@ -116,6 +116,12 @@ def cmd_draw(args: argparse.Namespace) -> int:
 
 
 def cmd_precision(args: argparse.Namespace) -> int:
+    if args.errors is not None:  # the error model on a measured table, not the physics runs
+        from kinegym.cli.calib import precision_with_errors
+
+        args.arm_given = args.arm is not None
+        return precision_with_errors(args)
+    args.arm = args.arm or "thesis_rrrr"
     from kinegym.envs.draw import save_rgb
     from kinegym.envs.sim.arm import ArmSim
     from kinegym.envs.sim.precision import axes_chart, run_precision
@@ -179,7 +185,12 @@ def add_parsers(sub: Any) -> None:
     pr = sub.add_parser("precision", help="stairs, parallel lines and a sine: static and dynamic error in mm")
     pr.add_argument("--axis", default="all", choices=("x", "y", "z", "all"), help="axis of the stairs")
     pr.add_argument("--speed", type=float, default=2, help="speed level 0..5")
-    pr.add_argument("--arm", default="thesis_rrrr", help="arm config name or YAML path")
+    pr.add_argument("--arm", default=None, help="arm config name or YAML path (default: thesis_rrrr)")
     pr.add_argument("--out", default="kinegym-out", help="folder for the PNGs")
+    pr.add_argument("--errors", default=None,
+                    help="error model (configs/arm_errors name or YAML, e.g. pincher_seed002): run --points "
+                         "through it instead of the physics runs")
+    pr.add_argument("--points", default="pincher_seed002",
+                    help="with --errors: measured points (configs/measurements name or YAML)")
     add_json(pr)
     pr.set_defaults(func=cmd_precision)

@@ -14,12 +14,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import tempfile
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_NO_ANSWER", "EXIT_BROKEN_INSTALL", "UsageError", "Parser",
-           "parse_floats", "parse_triples", "emit", "rnd", "add_json"]
+           "parse_floats", "parse_triples", "emit", "rnd", "add_json", "write_text_atomic"]
 
 EXIT_OK, EXIT_BROKEN_INSTALL, EXIT_USAGE, EXIT_NO_ANSWER = 0, 1, 2, 3
 
@@ -77,3 +80,19 @@ def rnd(x: Any, nd: int = 6) -> Any:
 def add_json(sp: argparse.ArgumentParser) -> None:
     """The ``--json`` switch every command has."""
     sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` all at once: a temporary file beside it, then a rename (a
+    reader never sees half a file; an interrupted write leaves the old one). Folders are made;
+    an unwritable place is a :class:`UsageError` naming it."""
+    out = Path(path)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, out)
+    except OSError as err:
+        raise UsageError(f"cannot write {str(out)!r}: {err.strerror or err}") from None
+    return out
