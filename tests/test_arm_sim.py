@@ -232,3 +232,24 @@ def test_cli_draw_and_precision(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert all(t["static_rms_mm"] < 1.0 for t in pr["tests"])
     assert main(["draw", "--shape", "x", "--speed", "9", "--out", str(tmp_path)]) == 2
     assert "--speed 9" in capsys.readouterr().err
+
+
+def test_homing_per_drive_as_the_thesis_does(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Drive 1 homes first and then waits turned away from the board; drive 3's index switch is
+    its limit switch, approached ever slower; the board stays clean."""
+    waits: list[np.ndarray] = []
+    original = ArmSim.move_joints
+
+    def record(self: ArmSim, q_target: object, *args: object, **kwargs: object) -> object:
+        waits.append(np.array(q_target, float))
+        return original(self, q_target, *args, **kwargs)
+
+    monkeypatch.setattr(ArmSim, "move_joints", record)
+    sim = ArmSim("thesis_rrrr", seed=1, homing=True)
+    jp = sim.joints
+    assert jp[2].index == pytest.approx(jp[2].lo) and jp[2].homing_slowdown > 0 and jp[1].homing_sweep > 0
+    assert waits and waits[0][0] == pytest.approx(math.radians(-90.0))  # drive 1's wait, before drives 2, 3
+    assert len(waits) == 2 and np.allclose(waits[-1], sim.q_park)        # then the move to park
+    rep = sim.homing_report
+    assert rep.reversals[0] == 1 and rep.reversals[2] == 0               # drive 1 came back from a stop
+    assert np.degrees(np.abs(rep.residual)).max() < 0.5 and sim.canvas.ink().max() == 0

@@ -443,11 +443,14 @@ class ArmSim:
     def home(self, timeout_s: float = 60.0) -> HomingReport:
         """Find every relative joint's index switch in turn and set its offset (thesis 3.1).
 
-        Each joint ramps at ``homing_speed`` in ``homing_dir``; the index switch fires when
-        the link crosses ``index_deg``; a command running ``stall_deg`` ahead of the encoder
-        means a limit stop (or ``homing_sweep_deg`` without an index): the joint turns back.
-        After two reversals without an index, or ``timeout_s``, :class:`HomingError`.
-        Ends with a joint move to park.
+        Each joint ramps at ``homing_speed`` in ``homing_dir`` (slowing down with
+        ``homing_slowdown_s``, as the thesis's drive 3 approaches the switch that is both its
+        index and its limit); the index switch fires when the link crosses ``index_deg``; a
+        command running ``stall_deg`` ahead of the encoder means a limit stop (or
+        ``homing_sweep_deg`` without an index, drive 2's fixed-angle sweep): the joint turns
+        back. A joint with ``homing_wait_deg`` then turns there and waits while the later
+        joints home (drive 1, out of the board's way). After two reversals without an
+        index, or ``timeout_s``, :class:`HomingError`. Ends with a joint move to park.
         """
         t0 = self.time_s
         start_err = self.q_enc() - self.q_true()
@@ -463,13 +466,16 @@ class ArmSim:
             ref = list(self.q_enc())
             start = ref[j]
             side = math.copysign(1.0, self.phys.q_true()[j] - jp.index)
-            n_rev, found = 0, False
+            n_rev, found, t_joint = 0, False, self.time_s
             while not found:
                 if self.time_s - t0 > timeout_s:
                     raise HomingError(f"arm '{self.arm.name}': homing joint {j + 1} timed out after {timeout_s} s")
-                ref[j] += direction * jp.homing_speed * self.dt
+                speed = jp.homing_speed
+                if jp.homing_slowdown > 0:
+                    speed *= max(0.2, math.exp(-(self.time_s - t_joint) / jp.homing_slowdown))
+                ref[j] += direction * speed * self.dt
                 ff = list(zeros)
-                ff[j] = direction * jp.homing_speed
+                ff[j] = direction * speed
                 self._tick(ref, ff)
                 enc_j = float(self.encoders()[j])
                 q_t = self.phys.q_true()[j]
@@ -494,6 +500,10 @@ class ArmSim:
             self.q_cmd = self.q_enc()
             self.q_cmd[:j] = np.asarray(ref[:j])
             self.hold(0.1)
+            if jp.homing_wait is not None:  # homed: out of the way while the others home
+                target = self.q_cmd.copy()
+                target[j] = jp.homing_wait
+                self.move_joints(target)
         self.homed = True
         self.move_joints(self.q_park)
         self.hold(0.2)

@@ -32,6 +32,12 @@ _JOINT_SIM_SCHEMA: dict[str, _configs.Spec] = {
     "homing_sweep_deg": _N(lo=0.0, default=0.0,
                            doc="turn back after this excursion without an index (0: only at a limit stop)"),
     "homing_speed_deg_s": _N(lo=0.0, lo_open=True, default=20.0),
+    "homing_slowdown_s": _N(lo=0.0, default=0.0,
+                            doc="homing speed falls as exp(-t / this) to a fifth (thesis drive 3, whose index "
+                                "switch is its limit switch: hit it slowly); 0 = constant speed"),
+    "homing_wait_deg": _N(lo=-360.0, hi=360.0, default=None,
+                          doc="once homed, turn here and wait while the later joints home (thesis drive 1: "
+                              "away from the board); absent = stay at the index"),
 }
 
 #: The ``sim:`` section of an arm YAML.
@@ -103,6 +109,8 @@ class JointParams:
     homing_dir: int
     homing_sweep: float
     homing_speed: float
+    homing_slowdown: float
+    homing_wait: float | None
     max_torque: float
     lo: float
     hi: float
@@ -118,5 +126,7 @@ def joint_params(cfg: dict, arm: WritingArm) -> list[JointParams]:
             backlash=math.radians(jc["backlash_deg"]), encoder_step=math.radians(jc["encoder_step_deg"]),
             absolute=bool(jc["absolute"]), index=math.radians(jc["index_deg"]), homing_dir=int(jc["homing_dir"]) or 1,
             homing_sweep=math.radians(jc["homing_sweep_deg"]), homing_speed=math.radians(jc["homing_speed_deg_s"]),
+            homing_slowdown=jc["homing_slowdown_s"],
+            homing_wait=None if jc["homing_wait_deg"] is None else math.radians(jc["homing_wait_deg"]),
             max_torque=float(arm.max_torque[j]), lo=lo, hi=hi))
     return out
