@@ -1,0 +1,154 @@
+"""Seed 001's mobile robot: holonomic or tricycle motion, the target-following controller, odometry
+noise and relocalisation from beacons.
+
+Two robots run side by side as in the seed: the *ideal* one is what the robot believes
+(odometry without noise), the *real* one moves with the same commands plus noise. The
+controller steers the ideal robot to each target in turn: turn rate ``w`` = the bearing to
+the target relative to the heading, clipped to ``+-w_max``; speed ``v`` = the distance,
+clipped to ``[0, v_max]`` (both per step); with ``turn_in_place`` the robot turns standing
+while ``|w| > 0.01``. Motion models:
+
+* ``holonomic`` (the seed's ``move(turn, forward)``): turn by ``w``, then drive ``v`` along
+  the new heading;
+* ``tricycle`` (the seed's ``move_triciclo(turn, forward, length)``): a steered front wheel
+  ``length`` ahead of the rear axle, steering angle ``w``; the heading turns by
+  ``v sin(w) / length`` while the body moves ``v cos(w)``.
+
+The real robot adds Gaussian noise to each step's turn and distance (``turn_noise`` rad,
+``forward_noise`` as a share of the distance). Whenever the real robot's measurement differs
+from what the ideal one would measure by more than ``threshold``, the robot relocalises: a
+grid search (:func:`~kinegym.kinematics.beacons.grid_search`) in a window of ``reloc_radius``
+around its belief (the seed: 5 at the start, 0.2 when relocalising, step 0.05), and the
+ideal robot jumps there - keeping its own heading (the seed copied the real robot's).
+
+Departures from the seed's script, whose indentation breaks it: it ran the tricycle model in
+holonomic mode and did not move at all otherwise, used the target points as beacons, and
+added the path length and time outside the loop. Here each mode runs its own model, the
+beacons are their own list, and the trajectories record every step.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .beacons import BeaconModel, Estimate, grid_search
+from .errors import InvalidInputError, as_array
+
+__all__ = ["MotionModel", "FollowResult", "follow", "step_pose", "steer"]
+
+
+@dataclass(frozen=True)
+class MotionModel:
+    """How the robot moves: ``kind`` ``"holonomic"`` or ``"tricycle"`` (steering ``length``),
+    per-step limits ``v_max`` and ``w_max`` (rad), ``turn_in_place``, and the real robot's noise."""
+
+    kind: str = "holonomic"
+    length: float = 0.2
+    v_max: float = 0.07
+    w_max: float = math.radians(14.0)
+    turn_in_place: bool = False
+    forward_noise: float = 0.01
+    turn_noise: float = 0.01
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("holonomic", "tricycle"):
+            raise InvalidInputError(f"kind={self.kind!r}; expected 'holonomic' or 'tricycle'")
+        for name in ("length", "v_max", "w_max"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise InvalidInputError(f"{name}={v!r}; expected a finite value > 0")
+        for name in ("forward_noise", "turn_noise"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"{name}={v!r}; expected a finite value >= 0")
+
+
+def step_pose(pose: Sequence[float], w: float, v: float, motion: MotionModel) -> np.ndarray:
+    """One step of the motion model from ``pose (x, y, heading)`` with command ``(w, v)``."""
+    x, y, th = (float(p) for p in pose)
+    if motion.kind == "holonomic":
+        th += w
+        x, y = x + v * math.cos(th), y + v * math.sin(th)
+    else:
+        th += v * math.sin(w) / motion.length
+        x, y = x + v * math.cos(w) * math.cos(th), y + v * math.cos(w) * math.sin(th)
+    return np.array([x, y, math.remainder(th, 2 * math.pi)])
+
+
+def steer(pose: Sequence[float], target: Sequence[float], motion: MotionModel) -> tuple[float, float]:
+    """The seed's controller: ``(w, v)`` toward ``target`` within the limits."""
+    dx, dy = target[0] - pose[0], target[1] - pose[1]
+    w = max(-motion.w_max, min(motion.w_max, math.remainder(math.atan2(dy, dx) - pose[2], 2 * math.pi)))
+    v = max(0.0, min(motion.v_max, math.hypot(dx, dy)))
+    if motion.turn_in_place and abs(w) > 0.01:
+        v = 0.0
+    return w, v
+
+
+@dataclass
+class FollowResult:
+    """Both trajectories ``(steps + 1, 3)``, the targets reached, every relocalisation (step and
+    estimate), the first (global) fix, and the path error: per step the distance between the
+    ideal and the real robot."""
+
+    ideal: np.ndarray
+    real: np.ndarray
+    reached: int
+    relocalisations: list[tuple[int, Estimate]]
+    first_fix: Estimate
+    path_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def max_path_error(self) -> float:
+        return float(self.path_error.max()) if len(self.path_error) else 0.0
+
+    @property
+    def mean_path_error(self) -> float:
+        return float(self.path_error.mean()) if len(self.path_error) else 0.0
+
+
+def follow(model: BeaconModel, targets: object, start: Sequence[float], motion: MotionModel | None = None,
+           rng: np.random.Generator | None = None, epsilon: float = 0.1, threshold: float | None = None,
+           start_radius: float = 5.0, reloc_radius: float = 0.2, step: float = 0.05, max_steps: int = 1000,
+           on_step: Callable[[np.ndarray, np.ndarray], None] | None = None) -> FollowResult:
+    """Seed 001's experiment: localise globally (a window of ``start_radius`` around ``start``),
+    then steer to each target until the ideal robot is within ``epsilon`` of it (at most
+    ``max_steps`` steps in all), relocalising whenever the measurement error exceeds
+    ``threshold`` (default ``epsilon``, as the seed)."""
+    motion = motion or MotionModel()
+    rng = rng if rng is not None else np.random.default_rng(0)
+    tg = as_array("targets", targets, (2,))
+    if tg.ndim != 2 or len(tg) == 0:
+        raise InvalidInputError(f"targets has shape {tg.shape}; expected (N, 2) with N >= 1 points")
+    limit = epsilon if threshold is None else threshold
+    if not (math.isfinite(limit) and limit > 0 and math.isfinite(epsilon) and epsilon > 0):
+        raise InvalidInputError(f"epsilon={epsilon!r}, threshold={threshold!r}; expected values > 0")
+    real = np.asarray(start, float).copy()
+    # the robot starts lost: a global fix from a guess at the window's centre
+    first = grid_search(model, model.sample(real, rng), real[:2], start_radius, step, heading=float(real[2]))
+    ideal = first.pose.copy()
+    tray_i, tray_r, relocs, reached = [ideal.copy()], [real.copy()], [], 0
+    for target in tg:
+        while math.dist(ideal[:2], target) > epsilon and len(tray_i) <= max_steps:
+            w, v = steer(ideal, target, motion)
+            ideal = step_pose(ideal, w, v, motion)
+            noisy_w = w + rng.normal(0.0, motion.turn_noise) if motion.turn_noise else w
+            noisy_v = v * (1.0 + rng.normal(0.0, motion.forward_noise)) if motion.forward_noise else v
+            real = step_pose(real, noisy_w, noisy_v, motion)
+            z = model.sample(real, rng)
+            if float(model.error(ideal, z)) > limit:  # the seed's relocalisation rule
+                est = grid_search(model, z, ideal[:2], reloc_radius, step, heading=float(ideal[2]), image=False)
+                ideal = est.pose.copy()
+                relocs.append((len(tray_i), est))
+            tray_i.append(ideal.copy())
+            tray_r.append(real.copy())
+            if on_step is not None:
+                on_step(ideal, real)
+        if math.dist(ideal[:2], target) <= epsilon:
+            reached += 1
+    ti, tr = np.array(tray_i), np.array(tray_r)
+    return FollowResult(ti, tr, reached, relocs, first, np.hypot(*(ti[:, :2] - tr[:, :2]).T))
