@@ -43,6 +43,9 @@ G = 9.81  # m/s^2: N per kg
 #: name -> number of values, in the order of the parameter vector
 PARAMETERS: dict[str, int] = {"base_offset_cm": 3, "base_tilt_deg": 2, "link_error_cm": 3, "joint_offset_deg": 4,
                               "compliance_deg_per_ncm": 1, "backlash_deg": 1}
+#: name -> the slice of the parameter vector it occupies
+_ENDS = np.cumsum(list(PARAMETERS.values()))
+_SLICES: dict[str, slice] = {k: slice(int(e - n), int(e)) for (k, n), e in zip(PARAMETERS.items(), _ENDS)}
 
 
 @dataclass(frozen=True)
@@ -202,11 +205,9 @@ def calibrate(arm: WritingArm, q_commanded: object, measured: object, fit: Seque
         raise InvalidInputError(f"fit={unknown!r} unknown; expected names from {list(PARAMETERS)}")
     start = start or ArmErrors()
     v0 = start.vector()
-    idx = np.concatenate([np.arange(sum(list(PARAMETERS.values())[:i]), sum(list(PARAMETERS.values())[:i + 1]))
-                          for i, k in enumerate(PARAMETERS) if k in fit]).astype(int)
+    idx = np.concatenate([np.arange(_SLICES[k].start, _SLICES[k].stop) for k in PARAMETERS if k in fit])
 
-    nonneg = [sum(list(PARAMETERS.values())[:i]) for i, k in enumerate(PARAMETERS)
-              if k in ("compliance_deg_per_ncm", "backlash_deg")]
+    nonneg = [_SLICES["compliance_deg_per_ncm"].start, _SLICES["backlash_deg"].start]
 
     def resid(v: np.ndarray) -> np.ndarray:
         try:
