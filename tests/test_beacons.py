@@ -67,3 +67,63 @@ def test_bad_input_is_named() -> None:
         MotionModel(kind="flying")
     with pytest.raises(InvalidInputError, match="targets"):
         follow(SQUARE, np.zeros((0, 2)), [0, 0, 0])
+
+
+def test_noise_threshold_is_the_noise_quantile() -> None:
+    """An exact belief's error stays under the 99 % threshold ~99 % of the time; the seed's 0.1
+    is exceeded almost always, so it relocalised at nearly every step."""
+    from kinegym.kinematics.mobile import noise_threshold
+
+    rng = np.random.default_rng(2)
+    poses = np.column_stack([rng.uniform(0, 4, (5000, 2)), np.zeros(5000)])
+    errs = np.array([SQUARE.error(p, SQUARE.sample(p, rng)) for p in poses])
+    thr = noise_threshold(SQUARE, 0.99)
+    assert 0.98 < np.mean(errs <= thr) < 0.998
+    assert np.mean(errs > 0.1) > 0.9
+    res_seed = follow(SQUARE, STAR, [0.0, 4.0, 0.0], MotionModel(), np.random.default_rng(0), threshold=0.1)
+    res_auto = follow(SQUARE, STAR, [0.0, 4.0, 0.0], MotionModel(), np.random.default_rng(0), threshold=thr)
+    assert len(res_auto.relocalisations) * 5 < len(res_seed.relocalisations)
+    assert res_auto.reached == 5 and res_auto.max_path_error < 0.5
+    with pytest.raises(InvalidInputError, match="quantile"):
+        noise_threshold(SQUARE, 1.0)
+
+
+def test_scene_files_are_validated(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from kinegym.configs import ConfigError
+    from kinegym.kinematics.mobile import load_scene
+
+    sc = load_scene("seed001")
+    assert np.array_equal(sc.model.beacons, sc.targets) and sc.start[2] == 0.0
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\ntargets: [[0, 1], [2, .nan]]\nstart: [0, 0, 0]\n")
+    with pytest.raises(ConfigError, match=r"targets\[1\]\[1\]"):
+        load_scene(str(bad))
+    bad.write_text("name: x\ntargets: []\nstart: [0, 0, 0]\n")
+    with pytest.raises(InvalidInputError, match="targets is empty"):
+        load_scene(str(bad))
+
+
+def test_follow_cli_reports_and_draws(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from PIL import Image
+
+    from kinegym.cli import main
+
+    gif = tmp_path / "run.gif"
+    assert main(["follow", "--model", "tricycle", "--beacons", "grid:2x2", "--out", str(tmp_path), "--gif",
+                 str(gif), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["reached"] == 5 and out["max_path_error"] < 0.5 and len(out["beacons"]) == 4
+    assert out["first_fix_error"] < 0.2 and out["relocalisations"] < out["steps"] / 3
+    heat = np.asarray(Image.open(out["error_map"]).convert("RGB"))
+    assert heat.shape[0] > 400 and heat.std() > 20  # a heat map, not a blank
+    with Image.open(gif) as im:
+        assert im.n_frames > 20
+    cases = [(["--beacons", "grid:0x2"], "grid:NxM"), (["--threshold", "x"], "--threshold"),
+             (["--targets", "1,2;3"], "--targets"), (["--scene", "nope"], "nope"),
+             (["--seed", "-1"], "--seed"), (["--beacons", "other"], "--beacons")]
+    for argv, needle in cases:
+        assert main(["follow", *argv, "--out", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err

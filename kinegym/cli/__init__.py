@@ -23,11 +23,11 @@ __all__ = ["main", "build_parser", "UsageError"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The whole ``kinegym`` parser: every command group adds its subcommands."""
-    from kinegym.cli import arm, calib, climb, demo, game, kin, play, servo, train
+    from kinegym.cli import arm, calib, climb, demo, follow, game, kin, play, servo, train
 
     p = Parser(prog="kinegym", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (demo, kin, game, climb, arm, calib, servo, play, train):
+    for group in (demo, kin, game, climb, follow, arm, calib, servo, play, train):
         group.add_parsers(sub)
     return p
 
