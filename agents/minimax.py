@@ -261,17 +261,20 @@ class StrongPlayer:
         keyed.sort(reverse=True)
         return [c for _, c in keyed]
 
-    def analyse(self, board: Board, all_best: bool = True) -> Analysis:
+    def analyse(self, board: Board, all_best: bool = True, limit_s: float | None = None) -> Analysis:
         """Value of ``board`` for the side to move and the moves that keep it.
 
         ``all_best=False`` (what :meth:`choose` uses) stops at the first best move in the
-        sampled order; ``best_moves[0]`` is then the chosen move.
+        sampled order; ``best_moves[0]`` is then the chosen move. ``limit_s``: an exact answer
+        within that many wall-clock seconds or :class:`SearchTimeout` (no heuristic guess).
         """
+        if limit_s is not None and not (isinstance(limit_s, (int, float)) and limit_s > 0):
+            raise ValueError(f"limit_s={limit_s!r}; expected a positive number of seconds or None")
         if board.is_over:
             raise GameError(f"no legal move: the game is over ({board.result()})")
         wall0 = time.perf_counter()
         solver = self.solver(board.game)
-        if self.deterministic:
+        if self.deterministic and limit_s is None:
             ns = self.node_seconds
             solver.clock = lambda: (solver.nodes + self._extra_nodes) * ns
         else:
@@ -302,15 +305,21 @@ class StrongPlayer:
         # side to move can *win* is asked with half the budget: unanswered in time, a draw is
         # what it plays for (the value is then a lower bound, ``exact=False``)
         deadline = None if self.time_budget_s is None else t0 + max(self.time_budget_s, self.hard_limit_s)
+        if limit_s is not None:
+            deadline = t0 + limit_s
         try:
             root = self._book_value(board) if self.use_book else None
             exact = root is not None
             if root is None:
                 quick = None if self.time_budget_s is None else t0 + 0.5 * self.time_budget_s
+                if limit_s is not None:
+                    quick = deadline
                 try:
                     root = WIN if solver.bounded(board, DRAW, WIN, quick) >= WIN else DRAW
                     exact = True  # a win, or at most a draw (the loop below tells draw from loss)
                 except SearchTimeout:
+                    if limit_s is not None:
+                        raise
                     root = DRAW
             if not all_best and root > LOSS:
                 # one null-window search "value >= root?" in the solver's own move order: its
@@ -336,6 +345,8 @@ class StrongPlayer:
                                      complete=all_best, move_values={c: LOSS for c in order}))
             return done(Analysis(root, best_moves, exact, "search", complete=all_best, move_values=values))
         except SearchTimeout:
+            if limit_s is not None:
+                raise
             move = self._fallback(board, order, solver, t0)
             return done(Analysis(DRAW, [move], False, "heuristic", complete=False))
 

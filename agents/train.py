@@ -52,6 +52,9 @@ import numpy as np
 import yaml
 
 import kinegym.configs as _configs
+from kinegym.agents.policies import GAIT_ENV_ID as ENV_ID
+from kinegym.agents.policies import POOL_KEYS as _POOL_KEYS
+from kinegym.agents.policies import policy_env_kwargs
 
 __all__ = [
     "TRAIN_SCHEMA",
@@ -63,14 +66,13 @@ __all__ = [
     "train",
     "resume",
     "evaluate",
-    "tune",
     "EvalRow",
     "policy_env_kwargs",
     "make_env",
     "EnvFactory",
 ]
 
-ENV_ID = "kinegym/HoleClimb-v0"
+
 HELD_OUT_SEED = 1_000_000  # evaluate: wall i is reset(seed=HELD_OUT_SEED + i)
 VALIDATION_SEED = 2_000_000  # the evaluation callback's wall stream
 DEFAULT_CONFIG = "hole_climb_maskable_ppo"
@@ -86,16 +88,6 @@ def make_env(**env_kwargs: Any) -> Any:
 
 
 @dataclass(frozen=True)
-class _Mapping(_configs.Spec):
-    """A free-form mapping (passed on to SB3 / the env, which check their own keys)."""
-
-    def check(self, value: Any, source: str, key: str) -> Any:
-        if not isinstance(value, dict):
-            raise _configs.ConfigError(source, key, value, "a mapping")
-        return dict(value)
-
-
-@dataclass(frozen=True)
 class _Schedule(_configs.Spec):
     """A positive number or ``lin_<start>`` (linear decay to 0 over training)."""
 
@@ -107,14 +99,58 @@ class _Schedule(_configs.Spec):
         return value
 
 
+@dataclass(frozen=True)
+class _NetArch(_configs.Spec):
+    """SB3's ``net_arch``: a list of 1..8 layer widths (1..4096), or ``{pi: [...], vf: [...]}``."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        widths = _configs.ListOf(item=_configs.Number(lo=1, hi=4096, integer=True), min_len=1, max_len=8)
+        if isinstance(value, dict):
+            return _configs.validate(value, {"pi": widths, "vf": widths}, source, prefix=key)
+        if isinstance(value, (list, tuple)):
+            return widths.check(value, source, key)
+        raise _configs.ConfigError(source, key, value, "a list of layer widths like [128, 128], or {pi: [...], "
+                                   "vf: [...]}")
+
+
+#: ``activation_fn`` names -> ``torch.nn`` classes
+ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU"}
+POLICY_KWARGS_SCHEMA: dict[str, _configs.Spec] = {
+    "net_arch": _NetArch(default=None),
+    "activation_fn": _configs.Text(choices=tuple(ACTIVATIONS), default=None),
+    "ortho_init": _configs.Flag(default=None),
+    "share_features_extractor": _configs.Flag(default=None),
+}
+
+
+@dataclass(frozen=True)
+class _Section(_configs.Spec):
+    """A mapping of the keys in ``fields`` only (absent keys stay absent: the consumer's defaults)."""
+
+    fields: Any = None
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        if not isinstance(value, dict):
+            raise _configs.ConfigError(source, key, value, "a mapping")
+        fields = self.fields() if callable(self.fields) else self.fields
+        out = _configs.validate(value, fields, source, prefix=key)
+        return {k: v for k, v in out.items() if k in value}
+
+
+def _env_kwargs_schema() -> dict[str, _configs.Spec]:
+    from kinegym.envs.hole_climb import ENV_KWARGS_SCHEMA
+
+    return ENV_KWARGS_SCHEMA
+
+
 _N = _configs.Number
 TRAIN_SCHEMA: dict[str, _configs.Spec] = {
     "algo": _configs.Text(choices=("maskable_ppo",), default="maskable_ppo"),
     "n_envs": _N(lo=1, hi=64, integer=True, default=2),
     "n_timesteps": _N(lo=1, integer=True, default=500_000),
     "policy": _configs.Text(choices=("MlpPolicy",), default="MlpPolicy"),
-    "policy_kwargs": _Mapping(default={}),
-    "env_kwargs": _Mapping(default={}),
+    "policy_kwargs": _Section(default={}, fields=POLICY_KWARGS_SCHEMA, doc="SB3 policy_kwargs (net_arch, ...)"),
+    "env_kwargs": _Section(default={}, fields=_env_kwargs_schema, doc="gymnasium.make keyword arguments"),
     "learning_rate": _Schedule(default=3e-4),
     "clip_range": _Schedule(default=0.2),
     "n_steps": _N(lo=8, integer=True, default=1024, doc="steps per env per update"),
@@ -149,18 +185,20 @@ def parse_schedule(value: Any) -> float | Callable[[float], float]:
 def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str = ENV_ID) -> dict[str, Any]:
     """The validated section ``env_id`` of a training YAML (a ``configs/train`` name or a path)."""
     src = _configs.resolve("train", path)
-    try:
-        data = yaml.safe_load(src.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise _configs.ConfigError(str(src), "", "<unparsable YAML>", f"valid YAML ({exc})") from exc
+    data = _configs.load_yaml(src)
     if not isinstance(data, dict) or env_id not in data:
         raise _configs.ConfigError(str(src), env_id, None if not isinstance(data, dict) else sorted(data),
                                    f"a section for {env_id}")
-    return _configs.validate(data[env_id], TRAIN_SCHEMA, str(src), prefix=env_id)
+    return _validate_train(data[env_id], str(src), env_id)
+
+
+def _validate_train(section: Any, source: str, env_id: str = ENV_ID) -> dict[str, Any]:
+    """The whole training section checked before anything is built: SB3's arguments, the
+    policy's and the env's keyword arguments (their keys, types and ranges)."""
+    return _configs.validate(section, TRAIN_SCHEMA, source, prefix=env_id)
 
 
 # ------------------------------------------------------------------ environments
-_POOL_KEYS = ("wall_pool", "wall_pool_seed")
 
 
 def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | None, subproc: bool,
@@ -192,7 +230,12 @@ def _model_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
     out = {k: cfg[k] for k in keys}
     out["learning_rate"] = parse_schedule(cfg["learning_rate"])
     out["clip_range"] = parse_schedule(cfg["clip_range"])
-    out["policy_kwargs"] = dict(cfg["policy_kwargs"])
+    pk = dict(cfg["policy_kwargs"])
+    if "activation_fn" in pk:
+        import torch
+
+        pk["activation_fn"] = getattr(torch.nn, ACTIVATIONS[pk["activation_fn"]])
+    out["policy_kwargs"] = pk
     return out
 
 
@@ -232,7 +275,7 @@ def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, make: EnvFactory, ex
     if cfg["normalize"]:
         from stable_baselines3.common.vec_env import VecNormalize
 
-        eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
+        eval_env = VecNormalize(eval_env, training=False, norm_reward=False)  # never saved
     every = max(1, cfg["eval_freq"] // n_envs)
     # the eval env is a DummyVecEnv of one, the training env a SubprocVecEnv: that is meant
     warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
@@ -256,7 +299,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
           make_env: EnvFactory = make_env) -> Path:
     """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring).
     ``minutes`` stops training after that much wall time (the final model is saved)."""
-    from sb3_contrib import MaskablePPO
+    from kinegym.agents.atomic_save import AtomicMaskablePPO, AtomicVecNormalize
 
     limit = _time_limit(minutes)  # (checks minutes before anything is made)
     cfg = load_train_config(config)
@@ -271,16 +314,15 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
         cfg["n_envs"] = int(n_envs)
     _set_threads(cfg["torch_threads"])
     run = _new_run_dir(Path(out), f"gait-seed{seed}")
-    (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
-    (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
+    _configs.write_atomic(run / "config.yaml", yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
+    _configs.write_atomic(run / "command.txt", " ".join(command if command is not None else sys.argv) + "\n")
     env = _make_vec(cfg, cfg["n_envs"], seed, run / "monitor", subproc=True, make=make_env, pool_seed=seed)
     if cfg["normalize"]:
-        from stable_baselines3.common.vec_env import VecNormalize
 
-        env = VecNormalize(env, norm_reward=False)
+        env = AtomicVecNormalize(env, norm_reward=False)
     try:
-        model = MaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"), device="cpu",
-                            **_model_kwargs(cfg))
+        model = AtomicMaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"),
+                                  device="cpu", **_model_kwargs(cfg))
         cbs = _callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
         model.save(run / "final_model.zip")
@@ -292,15 +334,31 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     return run
 
 
+def _saved_steps(model_zip: Path) -> int:
+    """``num_timesteps`` of a saved model, read from its JSON record (nothing unpickled)."""
+    import json
+    import zipfile
+
+    from kinegym.agents.policies import MAX_MODEL_BYTES
+
+    raw = _configs.read_bytes(model_zip, MAX_MODEL_BYTES, "model file (.zip)")
+    try:
+        import io
+
+        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
+            return int(json.loads(zf.read("data"))["num_timesteps"])
+    except (zipfile.BadZipFile, KeyError, ValueError, TypeError):
+        raise _configs.FileError(model_zip, "not an SB3 model archive", "a model saved by kinegym train") from None
+
+
 def _last_checkpoint(run: Path) -> tuple[Path, int]:
     cks = sorted((int(p.stem.split("_")[1]), p) for p in (run / "checkpoints").glob("model_*_steps.zip"))
     if not cks:
         final = run / "final_model.zip"
         if final.is_file():
-            from sb3_contrib import MaskablePPO
-
-            return final, int(MaskablePPO.load(final, device="cpu").num_timesteps)
-        raise FileNotFoundError(f"{run}: no checkpoints/model_*_steps.zip and no final_model.zip to resume from")
+            return final, _saved_steps(final)
+        raise _configs.FileError(run, "no checkpoints/model_*_steps.zip and no final_model.zip",
+                                 "a run with a checkpoint to resume from")
     steps, path = cks[-1]
     return path, steps
 
@@ -311,14 +369,17 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
     """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
     statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
     (default: the run's ``n_timesteps``)."""
-    from sb3_contrib import MaskablePPO
+    from kinegym.agents.atomic_save import AtomicMaskablePPO
+    from kinegym.agents.policies import load_maskable
 
     limit = _time_limit(minutes)
     src = Path(run_dir)
     if not (src / "config.yaml").is_file():
-        raise FileNotFoundError(f"--resume {src}: not a run directory (no config.yaml)")
-    saved = yaml.safe_load((src / "config.yaml").read_text())
-    cfg = _configs.validate(saved[ENV_ID], TRAIN_SCHEMA, str(src / "config.yaml"), prefix=ENV_ID)
+        raise _configs.FileError(src, "not a run directory (no config.yaml)", "a folder that kinegym train made")
+    saved = _configs.load_yaml(src / "config.yaml")
+    if not isinstance(saved, dict) or not isinstance(saved.get(ENV_ID), dict):
+        raise _configs.ConfigError(str(src / "config.yaml"), ENV_ID, None, "the run's training section")
+    cfg = _validate_train(saved[ENV_ID], str(src / "config.yaml"))
     seed = int(saved.get("seed", 0))
     ck, steps = _last_checkpoint(src)
     total = cfg["n_timesteps"] if timesteps is None else int(timesteps)
@@ -330,20 +391,22 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
     while (src.parent / f"{src.name}-resume{k}").exists():
         k += 1
     run = _new_run_dir(src.parent, f"{src.name}-resume{k}")
-    (run / "config.yaml").write_text(yaml.safe_dump({ENV_ID: cfg, "seed": seed, "resumed_from": str(ck),
+    _configs.write_atomic(run / "config.yaml", yaml.safe_dump({ENV_ID: cfg, "seed": seed, "resumed_from": str(ck),
                                                      "resumed_steps": steps}, sort_keys=False))
-    (run / "command.txt").write_text(" ".join(command if command is not None else sys.argv) + "\n")
+    _configs.write_atomic(run / "command.txt", " ".join(command if command is not None else sys.argv) + "\n")
     env = _make_vec(cfg, cfg["n_envs"], seed + 7919 * k, run / "monitor", subproc=True, make=make_env,
                     pool_seed=seed)
     if cfg["normalize"]:
-        from stable_baselines3.common.vec_env import VecNormalize
+        from kinegym.agents.atomic_save import load_vecnormalize
 
         stats = ck.parent / f"model_vecnormalize_{steps}_steps.pkl"
         if not stats.is_file():
             stats = src / "vecnormalize.pkl"
-        env = VecNormalize.load(str(stats), env)
+        env = load_vecnormalize(stats, env)
     try:
-        model = MaskablePPO.load(ck, env=env, device="cpu", tensorboard_log=str(run / "tb"))
+        model = load_maskable(ck, env.observation_space, env.action_space, env=env, cls=AtomicMaskablePPO,
+                              learning_rate=parse_schedule(cfg["learning_rate"]),
+                              clip_range=parse_schedule(cfg["clip_range"]), tensorboard_log=str(run / "tb"))
         cbs = _callbacks(cfg, run, cfg["n_envs"], make_env) + limit
         model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
                     reset_num_timesteps=False, tb_log_name="run")
@@ -403,7 +466,7 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
         offset = 0.0
         if earlier:
             try:
-                offset = float(yaml.safe_load((run / "config.yaml").read_text()).get("resumed_steps", 0))
+                offset = float(_configs.load_yaml(run / "config.yaml").get("resumed_steps", 0))
             except Exception:  # noqa: BLE001 - the curve is a convenience
                 offset = 0.0
         sx = steps[w - 1:] + offset
@@ -417,24 +480,6 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
 
 
 # ------------------------------------------------------------------ evaluation
-def policy_env_kwargs(policy: str | Path) -> dict[str, Any]:
-    """The ``env_kwargs`` a saved policy was trained with (from its run's ``config.yaml``, next
-    to the model or one folder up - ``best/`` and ``checkpoints/``), without ``mode`` and the
-    training wall pool (policies are judged on fresh walls); ``{}`` for a model outside a
-    run directory."""
-    p = Path(policy)
-    for d in (p.parent, p.parent.parent):
-        f = d / "config.yaml"
-        if f.is_file():
-            saved = yaml.safe_load(f.read_text())
-            kw = dict((saved.get(ENV_ID) or {}).get("env_kwargs") or {})
-            for key in ("mode", *_POOL_KEYS):
-                kw.pop(key, None)
-            return kw
-    return {}
-
-
-
 @dataclass
 class EvalRow:
     """One agent on the held-out walls in one mode."""
@@ -495,70 +540,3 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
                                 float(np.mean([r["moves"] for r in ok])) if ok else math.nan, ratio,
                                 1000 * float(np.median([r["think"] for r in res]))))
     return rows
-
-
-# ------------------------------------------------------------------ tuning
-def _storage(url: str) -> Any:
-    import optuna
-
-    if url.startswith("journal:"):
-        from optuna.storages.journal import JournalFileBackend, JournalStorage
-
-        return JournalStorage(JournalFileBackend(url[len("journal:"):]))
-    return optuna.storages.RDBStorage(url) if "://" in url else url
-
-
-def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config: str | Path = DEFAULT_CONFIG,
-         out: str | Path = "runs/tune", seed: int = 0, progress: bool = False,
-         make_env: EnvFactory = make_env) -> dict[str, Any]:
-    """Run ``trials`` Optuna trials of the study ``study`` in ``storage`` (created if missing);
-    several processes or machines may run this at once on one storage. Returns a summary."""
-    import optuna
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    st = _storage(storage)
-    s = optuna.create_study(study_name=study, storage=st, load_if_exists=True, direction="maximize",
-                            sampler=optuna.samplers.TPESampler(seed=None),
-                            pruner=optuna.pruners.MedianPruner(n_startup_trials=2, n_warmup_steps=1))
-
-    class Report(BaseCallback):  # called after every evaluation: report and maybe prune
-        def __init__(self, trial: optuna.Trial) -> None:
-            super().__init__()
-            self.trial, self.k, self.pruned = trial, 0, False
-
-        def _on_step(self) -> bool:
-            ev = self.parent
-            value = float(np.mean(ev._is_success_buffer)) if ev._is_success_buffer else float(ev.last_mean_reward)
-            self.k += 1
-            self.trial.report(value, self.k)
-            self.trial.set_user_attr("last_value", value)
-            if self.trial.should_prune():
-                self.pruned = True
-                return False
-            return True
-
-    def objective(trial: optuna.Trial) -> float:
-        over = {
-            "learning_rate": trial.suggest_float("learning_rate", 5e-5, 2e-3, log=True),
-            "ent_coef": trial.suggest_float("ent_coef", 1e-4, 5e-2, log=True),
-            "gamma": trial.suggest_categorical("gamma", [0.97, 0.99, 0.995]),
-            "n_steps": trial.suggest_categorical("n_steps", [256, 512, 1024]),
-            "policy_kwargs": {"net_arch": [trial.suggest_categorical("width", [64, 128, 256])] * 2},
-        }
-        cb = Report(trial)
-        run = train(config, timesteps, seed + trial.number, out=out, progress=progress,
-                    overrides={**over, "eval_freq": max(64, timesteps // 4)}, trial_callback=cb,
-                    command=["kinegym", "tune", "gait", f"trial {trial.number} of study {study}"], make_env=make_env)
-        trial.set_user_attr("run", str(run))
-        if cb.pruned:
-            raise optuna.TrialPruned()
-        if "last_value" not in trial.user_attrs:
-            raise RuntimeError(f"trial {trial.number}: no evaluation ran in {timesteps} steps; raise --timesteps")
-        return float(trial.user_attrs["last_value"])
-
-    s.optimize(objective, n_trials=trials)
-    done = [t for t in s.trials if t.state == optuna.trial.TrialState.COMPLETE]
-    best = s.best_trial if done else None
-    return {"study": study, "storage": storage, "trials": len(s.trials), "complete": len(done),
-            "pruned": sum(t.state == optuna.trial.TrialState.PRUNED for t in s.trials),
-            "best_value": None if best is None else best.value, "best_params": None if best is None else best.params}

@@ -24,11 +24,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
+from .errors import ConfigError
+from .io import FileError, load_yaml, parse_yaml, read_bytes, read_text, write_atomic
 
 __all__ = [
     "CONFIG_DIR",
     "ConfigError",
+    "FileError",
+    "load_yaml",
+    "parse_yaml",
+    "read_bytes",
+    "read_text",
+    "write_atomic",
     "Spec",
     "Number",
     "Text",
@@ -46,19 +53,6 @@ __all__ = [
 
 CONFIG_DIR: Path = Path(__file__).resolve().parent
 _REQUIRED = object()
-
-
-class ConfigError(ValueError):
-    """A configuration is missing, malformed or holds a bad value.
-
-    Attributes ``source`` (file), ``key`` (dotted path), ``value`` and ``expected`` say
-    exactly what is wrong; ``str(err)`` is one line naming all four.
-    """
-
-    def __init__(self, source: str, key: str, value: Any, expected: str) -> None:
-        self.source, self.key, self.value, self.expected = source, key, value, expected
-        where = f"{source}: {key}" if key else source
-        super().__init__(f"{where}: {value!r} is not valid; expected {expected}")
 
 
 @dataclass(frozen=True)
@@ -99,7 +93,10 @@ class Number(Spec):
         return kind + (" " + " and ".join(parts) if parts else "")
 
     def check(self, value: Any, source: str, key: str) -> Any:
-        ok = _is_number(value) and math.isfinite(value)
+        try:
+            ok = _is_number(value) and math.isfinite(value)
+        except OverflowError:  # an integer too large for a float
+            ok = False
         if ok and self.integer and not float(value).is_integer():
             ok = False
         if ok and self.lo is not None:
@@ -272,8 +269,4 @@ def resolve(kind: str, name_or_path: str | Path) -> Path:
 def load(kind: str, name_or_path: str | Path, schema: Mapping[str, Spec]) -> dict[str, Any]:
     """Read, parse and validate one configuration file (see :func:`resolve`)."""
     path = resolve(kind, name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(str(path), "", "<unparsable YAML>", f"valid YAML ({exc})") from exc
-    return validate(data, schema, source=str(path))
+    return validate(load_yaml(path), schema, source=str(path))

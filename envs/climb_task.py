@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+import kinegym.configs as _configs
 from kinegym.envs.sim.climber_model import ClimberModel
 from kinegym.envs.sim.gait import min_enclosing_circle
 from kinegym.kinematics.holes import HoleMap
@@ -33,6 +34,47 @@ RouteFinder = Callable[[ClimberModel, HoleMap, Sequence[int], int, int], "list[t
 
 WALL_DEFAULTS: dict[str, Any] = {"cols": (5, 8), "rows": (8, 14), "spacing_cm": 15.0, "jitter_cm": 1.0,
                                  "missing": 0.08}
+
+
+#: Bounds of the generated walls' settings: (lowest, highest) per key; "missing" is a share.
+WALL_LIMITS: dict[str, tuple[float, float]] = {"cols": (3, 60), "rows": (3, 120), "spacing_cm": (1.0, 200.0),
+                                               "jitter_cm": (0.0, 50.0), "missing": (0.0, 0.5)}
+
+
+def _check_wall_kwargs(kw: dict[str, Any]) -> None:
+    """Each generated-wall setting a number or a ``(lo, hi)`` range within :data:`WALL_LIMITS`
+    (a 10,000 x 10,000 wall or one with every hole missing would never yield a route)."""
+    for key, (lo, hi) in WALL_LIMITS.items():
+        v = kw[key]
+        vals = list(v) if isinstance(v, (tuple, list)) else [v]
+        integer = key in ("cols", "rows")
+        ok = len(vals) in (1, 2) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and lo <= x <= hi
+            and (not integer or float(x).is_integer()) for x in vals) and vals[0] <= vals[-1]
+        if not ok:
+            kind = "integers" if integer else "numbers"
+            raise ValueError(f"wall_kwargs[{key!r}]={v!r}; expected {kind} in {lo:g}..{hi:g}, one value or a "
+                             "[lo, hi] range")
+    if max(np.atleast_1d(kw["jitter_cm"])) >= 0.5 * min(np.atleast_1d(kw["spacing_cm"])):
+        raise ValueError(f"wall_kwargs jitter_cm={kw['jitter_cm']!r} must stay below half the spacing "
+                         f"({kw['spacing_cm']!r} cm): holes would swap places")
+
+
+class WallKwargsSpec(_configs.Spec):
+    """``wall_kwargs`` in a YAML file: known keys (:data:`WALL_DEFAULTS`), values in :data:`WALL_LIMITS`."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        if not isinstance(value, dict):
+            raise _configs.ConfigError(source, key, value, "a mapping of wall settings")
+        unknown = sorted(set(map(str, value)) - set(WALL_DEFAULTS))
+        if unknown:
+            raise _configs.ConfigError(source, f"{key}.{unknown[0]}", value[unknown[0]],
+                                       "no such key; known keys: " + ", ".join(WALL_DEFAULTS))
+        try:
+            _check_wall_kwargs({**WALL_DEFAULTS, **value})
+        except ValueError as err:
+            raise _configs.ConfigError(source, key, value, str(err).split("; expected ", 1)[-1]) from None
+        return dict(value)
 
 
 def candidate_holes(holes: HoleMap, stance: Sequence[int], k: int, radius: float) -> list[int]:
@@ -117,6 +159,7 @@ class ClimbTask:
         self.route_finder, self.hints = route_finder, hints
         self.wall_pool, self.wall_pool_seed = wall_pool, wall_pool_seed
         self.wall_kwargs = {**WALL_DEFAULTS, **(wall_kwargs or {})}
+        _check_wall_kwargs(self.wall_kwargs)
         self.reach = float(np.max(model.geom.l1 + model.geom.l2))
         self.fixed_wall: HoleMap | None = None
         if isinstance(wall, HoleMap):

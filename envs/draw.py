@@ -13,8 +13,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from kinegym.configs.io import FileError, write_atomic
 from kinegym.kinematics.climber import ClimberGeometry, body_to_wall, elbow_positions, hand_positions
 from kinegym.kinematics.holes import HoleMap
+from kinegym.vision.image_io import write_image
 
 __all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb",
     "save_gif", "ARM_COLOURS"]
@@ -86,11 +88,7 @@ class Canvas:
 
     def save(self, path: str | Path) -> Path:
         """Write a PNG (creating folders); returns the path."""
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        if not cv2.imwrite(str(out), cv2.cvtColor(self.image, cv2.COLOR_RGB2BGR)):
-            raise OSError(f"could not write image {out}")
-        return out
+        return write_image(self.image, path)
 
 
 def fit_canvas(points: object, margin: float = 12.0, scale: float = 8.0) -> Canvas:
@@ -205,20 +203,22 @@ def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title
 
 
 def save_rgb(img: np.ndarray, path: str | Path) -> Path:
-    """Write an RGB array as PNG (creating folders)."""
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(out), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
-        raise OSError(f"could not write image {out}")
-    return out
+    """Write an RGB array as PNG or JPEG (by the extension) through the one atomic writer
+    (:func:`kinegym.vision.image_io.write_image`; a bad path is a named ``FileError``)."""
+    return write_image(img, path)
 
 
 def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
     """Write RGB frames as an animated GIF (Pillow), same-size frames padded if needed."""
+    import io
+
     from PIL import Image
 
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if out.suffix.lower() != ".gif":
+        raise FileError(out, f"extension {out.suffix or '(none)'!r}", "a GIF path ending in .gif")
+    if not frames:
+        raise ValueError("save_gif needs at least one frame")
     h = max(f.shape[0] for f in frames)
     w = max(f.shape[1] for f in frames)
     imgs = []
@@ -226,8 +226,10 @@ def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
         canvas = np.full((h, w, 3), 255, np.uint8)
         canvas[: f.shape[0], : f.shape[1]] = f
         imgs.append(Image.fromarray(canvas).convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
-    imgs[0].save(out, save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0, optimize=False)
-    return out
+    buf = io.BytesIO()
+    imgs[0].save(buf, format="GIF", save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0,
+                 optimize=False)
+    return write_atomic(out, buf.getvalue(), (".gif",), "GIF")
 
 
 def draw_climb(holes: HoleMap, goal: int, pose: object, q: object, geom: ClimberGeometry, estimate: object,

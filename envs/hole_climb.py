@@ -23,8 +23,12 @@ As panda-gym splits robot and task, the env is a thin join of :class:`~kinegym.e
 (0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the centroid of
 the holes the robot believes it holds, nearest first
 (:func:`kinegym.envs.climb_task.candidate_holes`). Actions the robot's own gait
-model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``
-(a stepped masked action is not an error: it fails as ``unreachable`` and costs a move).
+model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``.
+A masked action, an action out of range or of the wrong type (a string, a float, a bool)
+raises :class:`~kinegym.envs.errors.InvalidActionError` naming the valid actions;
+``masked="fail"`` instead lets a masked move be tried (it fails as ``unreachable`` and
+costs a move, and the observation flags it). ``step()`` before ``reset()`` or after the
+episode ended raises :class:`~kinegym.envs.errors.ResetNeededError`.
 
 ## Observation Space
 
@@ -109,8 +113,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+import kinegym.configs as _configs
 from kinegym.envs.climb_robot import ClimbRobot
-from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, stance_hops
+from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, WallKwargsSpec, stance_hops
+from kinegym.envs.errors import ResetNeededError, check_action
 from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
 from kinegym.kinematics.holes import HoleMap
 
@@ -135,6 +141,22 @@ def observation_layout(candidates: int = 8, memory: bool = False, hints: bool = 
     return out
 
 
+#: What ``gymnasium.make(ENV_ID, ...)`` accepts from a YAML file (training configs): every
+#: keyword of :class:`HoleClimbEnv` but ``render_mode`` and ``route_finder`` (objects, not data).
+ENV_KWARGS_SCHEMA: dict[str, _configs.Spec] = {
+    "mode": _configs.Text(choices=("kinematic", "physics"), default="kinematic"),
+    "wall": _configs.Text(default="generated", doc="'generated' or a wall config name / YAML path"),
+    "robot": _configs.Text(default="climber", doc="robot config name or YAML path"),
+    "candidates": _configs.Number(lo=1, hi=32, integer=True, default=8),
+    "wall_kwargs": WallKwargsSpec(default={}, doc="generated walls' settings: cols, rows, spacing_cm, ..."),
+    "memory": _configs.Flag(default=False),
+    "hints": _configs.Flag(default=False),
+    "wall_pool": _configs.Number(lo=0, hi=1_000_000, integer=True, default=0),
+    "wall_pool_seed": _configs.Number(lo=0, hi=2**32 - 1, integer=True, default=0),
+    "masked": _configs.Text(choices=("raise", "fail"), default="raise"),
+}
+
+
 class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     """The climber on a wall of holes (see the module docstring for the tables)."""
 
@@ -143,7 +165,11 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     def __init__(self, render_mode: str | None = None, mode: str = "kinematic", wall: str | HoleMap = "generated",
                  robot: str = "climber", candidates: int = 8, wall_kwargs: dict[str, Any] | None = None,
                  route_finder: RouteFinder | None = None, memory: bool = False, hints: bool = False,
-                 wall_pool: int = 0, wall_pool_seed: int = 0) -> None:
+                 wall_pool: int = 0, wall_pool_seed: int = 0, masked: str = "raise") -> None:
+        if masked not in ("raise", "fail"):
+            raise ValueError(f"masked={masked!r}; expected 'raise' (a masked action is an error) or 'fail'")
+        self.masked = masked
+        self._done = True
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; expected one of {self.metadata['render_modes']} or None")
         if mode not in ("kinematic", "physics"):
@@ -203,14 +229,14 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self._visits: dict[tuple[int, int, int], int] = {self.believed_stance: 1}  # believed stances this episode
         self._failed: set[tuple[tuple[int, int, int], int, int]] = set()  # (stance, arm, hole) that failed
         self.cand, self.mask = self.robot.options(self.K, self.reach, self.task.stance_cache)
+        self._done = False
         return self._obs(), self._info()
 
     def step(self, action: int | np.integer) -> tuple[np.ndarray, float, bool, bool, dict]:
-        if self.holes is None:
-            raise RuntimeError("call reset() before step()")
-        a = int(action)
-        if not 0 <= a < 3 * self.K:
-            raise ValueError(f"action {action!r}; expected 0..{3 * self.K - 1}")
+        if self.holes is None or getattr(self, "_done", False):
+            raise ResetNeededError("step() without a live episode: call reset() first (the episode ended or "
+                                   "never began)")
+        a = check_action(action, 3 * self.K, self.mask if self.masked == "raise" else None)
         self._history.append(a)
         arm, k = divmod(a, self.K)
         hole = self.cand[k]
@@ -232,9 +258,14 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self._prev_dist = dist
         self.cand, self.mask = self.robot.options(self.K, self.reach, self.task.stance_cache)
         obs = self._obs()
+        stuck = not fell and not success and not self.mask.any()  # no move left the model calls feasible
+        self._done = bool(success or fell or stuck)
         if self.render_mode == "human":
             self.render()
-        return obs, reward, bool(success or fell), False, self._info(success)
+        info = self._info(success)
+        if stuck:
+            info["stuck"] = True
+        return obs, reward, bool(success or fell), stuck, info
 
     # ------------------------------------------------------------------ observation and info
     def _obs(self) -> np.ndarray:

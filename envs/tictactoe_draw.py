@@ -43,9 +43,12 @@ layout - plane 0 the agent's marks, plane 1 the opponent's, from the board as re
 ## Rewards
 
 ``+1`` for a win, ``-1`` for a loss, ``0`` for a draw and for every other step (plain floats).
-A masked cell (occupied on the board the agent was shown) loses the game: ``-1``,
-``terminated``, ``info["illegal"] = True``. A cell free on the shown board but occupied on
-the real one (possible only after an unresolved misread) ends the episode *truncated*,
+A masked cell (occupied on the board the agent was shown), a cell out of range or an action
+of the wrong type raises :class:`~kinegym.envs.errors.InvalidActionError` naming the free
+cells; with ``illegal="lose"`` a masked cell instead loses the game: ``-1``, ``terminated``,
+``info["illegal"] = True`` (for training without masks). ``step()`` before ``reset()`` or
+after the game ended raises :class:`~kinegym.envs.errors.ResetNeededError`. A cell free on
+the shown board but occupied on the real one (possible only after an unresolved misread) ends the episode *truncated*,
 reward ``0``, with ``info["read_error"]``.
 
 ## Starting State
@@ -94,6 +97,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from kinegym.envs.errors import ResetNeededError, check_action
 from kinegym.envs.game import EMPTY, Board, Game, O, X
 
 __all__ = ["TicTacToeDrawEnv", "random_opponent", "OpponentFactory"]
@@ -120,11 +124,14 @@ class TicTacToeDrawEnv(gym.Env):
                  opponents: Mapping[str, OpponentFactory] | None = None, draw_physics: bool = True,
                  draw_field: bool = True, erase: bool = True, obs_mode: str = "board", camera: str = "default",
                  max_read_tries: int = 3, image_obs_size: tuple[int, int] = (128, 96), arm: str = "thesis_rrrr",
-                 homing: bool = False, render_mode: str | None = None) -> None:
+                 homing: bool = False, render_mode: str | None = None, illegal: str = "raise") -> None:
+        if illegal not in ("raise", "lose"):
+            raise ValueError(f"illegal={illegal!r}; expected 'raise' (an occupied cell is an error) or 'lose'")
+        self.illegal = illegal
         self._kwargs = dict(board=board, k=k, agent_symbol=agent_symbol, opponent=opponent, opponents=opponents,
-                            draw_physics=draw_physics, draw_field=draw_field, erase=erase, obs_mode=obs_mode,
-                            camera=camera, max_read_tries=max_read_tries, image_obs_size=image_obs_size, arm=arm,
-                            homing=homing, render_mode=render_mode)
+                            illegal=illegal, draw_physics=draw_physics, draw_field=draw_field, erase=erase,
+                            obs_mode=obs_mode, camera=camera, max_read_tries=max_read_tries,
+                            image_obs_size=image_obs_size, arm=arm, homing=homing, render_mode=render_mode)
         if board not in (3, 5):
             raise ValueError(f"board={board!r}; expected 3 or 5 (cells a side)")
         k = (3 if board == 3 else 4) if k is None else int(k)
@@ -356,10 +363,8 @@ class TicTacToeDrawEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
         if self._done:
-            raise RuntimeError("step() after the episode ended: call reset()")
-        a = int(action)
-        if not 0 <= a < self.n * self.n:
-            raise ValueError(f"action {action!r}; expected a cell 0..{self.n * self.n - 1}")
+            raise ResetNeededError("step() without a live game: call reset() first (the game ended or never began)")
+        a = check_action(action, self.n * self.n, self.action_masks() if self.illegal == "raise" else None)
         self._history.append(("step", a))
         self._status = []
         if self.belief.flat[a] != EMPTY:

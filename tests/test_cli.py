@@ -174,4 +174,4 @@ def test_read_board_reads_a_photo_and_refuses_a_blank(tmp_path: Path, capsys: py
     code, out, _ = run(capsys, "read-board", str(blank), "--json")
     assert code == 3 and json.loads(out)["error"] == "NoBoardError"
     code, _, err = run(capsys, "read-board", str(tmp_path / "missing.png"))
-    assert code == 2 and "does not exist" in err
+    assert code == 2 and "no such file" in err

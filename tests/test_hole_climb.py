@@ -38,15 +38,17 @@ def rollout_digest(env: gym.Env, seed: int, steps: int) -> str:
 
 
 def test_gymnasium_and_sb3_checkers_pass() -> None:
+    """The checkers step actions sampled from the whole space, masks unseen: a masked one is an
+    error by default, so they run with masked="fail" (a masked move is tried and fails)."""
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make(ENV_ID)
+    env = gym.make(ENV_ID, masked="fail")
     check_env(env.unwrapped)
-    sb3_check_env(gym.make(ENV_ID))
-    full = gym.make(ENV_ID, memory=True, hints=True, wall_pool=4)  # what training uses
+    sb3_check_env(gym.make(ENV_ID, masked="fail"))
+    full = gym.make(ENV_ID, memory=True, hints=True, wall_pool=4, masked="fail")  # what training uses
     check_env(full.unwrapped)
-    sb3_check_env(gym.make(ENV_ID, memory=True, hints=True, wall_pool=4))
+    sb3_check_env(gym.make(ENV_ID, memory=True, hints=True, wall_pool=4, masked="fail"))
     assert env.spec.max_episode_steps == 200
     assert env.unwrapped.metadata["render_fps"] > 0
 
@@ -233,9 +235,14 @@ def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
         feasible = info["action_mask"]
         assert feasible.any() and set(np.round(deltas[feasible]).tolist()) <= {-1.0, 0.0, 1.0}
         assert not obs[m + 1 + 3 * K:].any()  # nothing has failed yet
-    # a masked (infeasible) move fails and is then flagged from this stance
+    # a masked (infeasible) move is an error; with masked="fail" it fails and is then flagged
+    from kinegym.envs.errors import InvalidActionError
+
     obs, info = env.reset(seed=0)
     bad = next(a for a in range(3 * K) if not info["action_mask"][a] and u.candidates[a % K] >= 0)
+    with pytest.raises(InvalidActionError, match="masked out"):
+        env.step(bad)
+    u.masked = "fail"
     obs, r, term, trunc, info = env.step(bad)
     assert info["outcome"] != "ok"
     assert obs[m + 1 + 3 * K + bad] == 1.0 and obs[m + 1 + 3 * K:].sum() == 1.0
@@ -276,3 +283,32 @@ def test_observation_layout_is_the_documented_table() -> None:
         assert starts == sorted(starts) and starts[0] == 0
     obs, info = env.reset(seed=4)
     assert np.array_equal(obs[lay["action_mask"]], info["action_mask"].astype(np.float32))
+
+
+def test_invalid_actions_and_steps_after_the_end_are_named_errors() -> None:
+    from kinegym.envs.errors import InvalidActionError, ResetNeededError
+
+    env = gym.make(ENV_ID)
+    with pytest.raises(ResetNeededError):
+        env.unwrapped.step(0)
+    obs, info = env.reset(seed=1)
+    n = env.action_space.n
+    valid = [int(i) for i in np.flatnonzero(info["action_mask"])]
+    for bad, needle in ((n, "out of range"), (-1, "out of range"), ("1", "type str"), (1.5, "type float"),
+                        (None, "type NoneType"), (False, "type bool")):
+        with pytest.raises(InvalidActionError, match=needle) as err:
+            env.step(bad)
+        assert err.value.valid == valid
+    # an episode that ends refuses the next step until reset
+    u = env.unwrapped
+    done = False
+    while not done:
+        a = int(np.flatnonzero(u.action_masks())[0])
+        obs, r, term, trunc, info = env.step(np.int64(a))
+        done = term or trunc
+    if term or info.get("stuck"):
+        with pytest.raises(ResetNeededError):
+            u.step(a)
+    env.reset(seed=1)
+    with pytest.raises(ValueError, match="masked="):
+        gym.make(ENV_ID, masked="ignore")

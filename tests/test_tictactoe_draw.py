@@ -44,10 +44,12 @@ def digest(obs_list: list[Any]) -> str:
 
 
 def test_gymnasium_and_sb3_checkers_pass() -> None:
+    """The checkers step cells sampled from the whole board, masks unseen: an occupied one is an
+    error by default, so they run with illegal="lose"."""
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    for kw in (FAST, {**FAST, "obs_mode": "both", "board": 3}):
+    for kw in ({**FAST, "illegal": "lose"}, {**FAST, "obs_mode": "both", "board": 3, "illegal": "lose"}):
         env = gym.make(ENV_ID, **kw)
         check_env(env.unwrapped)
         sb3_check_env(env.unwrapped)
@@ -70,19 +72,35 @@ def test_spaces_masks_and_info() -> None:
 
 
 def test_illegal_and_bad_actions() -> None:
+    from kinegym.envs.errors import InvalidActionError, ResetNeededError
+
     env = gym.make(ENV_ID, **FAST)
+    with pytest.raises(ResetNeededError, match="reset"):
+        env.unwrapped.step(0)
     env.reset(seed=2)
     obs, r, term, trunc, info = env.step(0)
     taken = int(np.flatnonzero(~info["action_mask"])[0])
+    free = [int(i) for i in np.flatnonzero(info["action_mask"])]
+    with pytest.raises(InvalidActionError, match="masked out") as err:
+        env.step(taken)
+    assert err.value.valid == free
+    for bad, needle in ((25, "out of range"), (-1, "out of range"), ("3", "type str"), (2.0, "type float"),
+                        (True, "type bool"), (np.array([1, 2]), "type ndarray")):
+        with pytest.raises(InvalidActionError, match=needle):
+            env.step(bad)
+    obs, r, term, trunc, info = env.step(np.array(free[0]))  # SB3's 0-d array is an action
+    # illegal="lose": an occupied cell loses instead (training without masks)
+    env = gym.make(ENV_ID, **FAST, illegal="lose")
+    env.reset(seed=2)
+    obs, r, term, trunc, info = env.step(0)
     obs, r, term, trunc, info = env.step(taken)
     assert (r, term, trunc, info["illegal"]) == (-1.0, True, False, True)
-    with pytest.raises(RuntimeError, match="reset"):
+    with pytest.raises(ResetNeededError, match="reset"):
         env.step(1)
-    env.reset(seed=2)
-    with pytest.raises(ValueError, match="expected a cell 0..24"):
-        env.step(25)
     with pytest.raises(ValueError, match="opponent="):
         gym.make(ENV_ID, **FAST, opponent="grandmaster")
+    with pytest.raises(ValueError, match="illegal="):
+        gym.make(ENV_ID, **FAST, illegal="ignore")
 
 
 def test_agent_as_o_sees_the_opponents_first_mark() -> None:

@@ -85,6 +85,8 @@ def test_train_smoke_resume_and_evaluate(tmp_path: Path) -> None:
 def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:
     import optuna
 
+    from kinegym.agents.tune import open_storage
+
     cfg = small_config(tmp_path, n_envs=1, eval_episodes=1)
     storage = f"journal:{tmp_path / 'study.log'}"
     cmd = [sys.executable, "-m", "kinegym", "tune", "gait", "--trials", "1", "--storage", storage, "--study", "s",
@@ -94,7 +96,7 @@ def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:
     for p in procs:
         out, err = p.communicate(timeout=600)
         assert p.returncode == 0, err[-2000:]
-    study = optuna.load_study(study_name="s", storage=T._storage(storage))
+    study = optuna.load_study(study_name="s", storage=open_storage(storage))
     assert len(study.trials) == 2
     assert all(t.state in (optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.PRUNED) for t in study.trials)
     assert len({t.params["learning_rate"] for t in study.trials}) == 2

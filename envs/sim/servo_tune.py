@@ -127,7 +127,7 @@ def tune_joint(arm: str | Path, joint: int, amplitude: float = math.radians(10.0
 def tuned_config(arm: str | Path, results: Sequence[TuneResult]) -> str:
     """The arm's YAML with the tuned joints' gains replaced (what ``--arm FILE`` reads back)."""
     path = _configs.resolve("arms", arm)
-    raw = yaml.safe_load(path.read_text(encoding="utf-8"))
+    raw = _configs.load_yaml(path)
     joints = raw.setdefault("sim", {}).setdefault("joints", [{}, {}, {}, {}])
     for r in results:
         kp, kv, ki = r.after.gains

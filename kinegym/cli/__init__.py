@@ -51,6 +51,18 @@ def _glue_negative_values(argv: list[str]) -> list[str]:
 
 
 
+def _check_common(args: argparse.Namespace) -> None:
+    """Options many commands share, checked once: a seed is an integer in 0..2**32-1 (numpy's
+    and Gymnasium's range); a count of episodes, games or trials is at least 1."""
+    seed = getattr(args, "seed", None)
+    if isinstance(seed, int) and not 0 <= seed < 2**32:
+        raise UsageError(f"--seed {seed}; expected an integer in 0..{2**32 - 1}")
+    for name in ("episodes", "games", "trials", "evals"):
+        v = getattr(args, name, None)
+        if isinstance(v, int) and v < 1:
+            raise UsageError(f"--{name} {v}; expected an integer >= 1")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code (also used by the ``kinegym`` script)."""
     from kinegym.configs import ConfigError
@@ -72,6 +84,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         if getattr(args, "map_sigma", 0) is None:
             args.map_sigma = args.map_default
+        _check_common(args)
         func: Callable[[argparse.Namespace], int] = args.func
         code = func(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the handler below, not at exit

@@ -14,8 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -83,16 +81,9 @@ def add_json(sp: argparse.ArgumentParser) -> None:
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` all at once: a temporary file beside it, then a rename (a
-    reader never sees half a file; an interrupted write leaves the old one). Folders are made;
-    an unwritable place is a :class:`UsageError` naming it."""
-    out = Path(path)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except OSError as err:
-        raise UsageError(f"cannot write {str(out)!r}: {err.strerror or err}") from None
-    return out
+    """Write ``text`` to ``path`` all at once through the one writer,
+    :func:`kinegym.configs.io.write_atomic` (its :class:`~kinegym.configs.io.FileError` names
+    the path and why; the CLI exits 2)."""
+    from kinegym.configs.io import write_atomic
+
+    return write_atomic(path, text, what="output file")

@@ -27,7 +27,7 @@ def _game(board: int, k: int | None) -> Any:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from kinegym.agents.minimax import StrongPlayer
+    from kinegym.agents.minimax import SearchTimeout, StrongPlayer
     from kinegym.envs.game import Board
 
     b = Board.parse(args.board, k=args.k)
@@ -37,9 +37,18 @@ def cmd_solve(args: argparse.Namespace) -> int:
         emit(args, {"game": str(g), "board": str(b), "result": b.result(), "best_moves": []},
               f"{g}: the game is over ({b.result()}); no move to make")
         return EXIT_NO_ANSWER
+    if not (0 < args.time_limit <= 86_400):
+        raise UsageError(f"--time-limit {args.time_limit!r}; expected 0 < seconds <= 86400")
     player = StrongPlayer(seed=0, time_budget_s=None, book=not args.no_book)
     t0 = time.perf_counter()
-    a = player.analyse(b, all_best=True)
+    try:
+        a = player.analyse(b, all_best=True, limit_s=args.time_limit)
+    except SearchTimeout:
+        secs = time.perf_counter() - t0
+        emit(args, {"game": str(g), "board": str(b), "to_move": mover, "value": None, "outcome": "unknown",
+                    "best_moves": [], "seconds": secs, "time_limit_s": args.time_limit},
+             f"{g}, {mover} to move: unknown within the budget ({args.time_limit:g} s; --time-limit to allow more)")
+        return EXIT_NO_ANSWER
     secs = time.perf_counter() - t0
     cells = [list(g.rc(c)) for c in sorted(a.best_moves)]
     text = [b.pretty(), "",
@@ -85,17 +94,11 @@ def cmd_match(args: argparse.Namespace) -> int:
 
 
 def cmd_read_board(args: argparse.Namespace) -> int:
-    import cv2
-
     from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
+    from kinegym.vision.image_io import read_image
 
     path = Path(args.image)
-    if not path.is_file():
-        raise UsageError(f"image {str(path)!r} does not exist")
-    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if bgr is None:
-        raise UsageError(f"image {str(path)!r} is not an image OpenCV can read (PNG, JPEG, ...)")
-    rgb = bgr[..., ::-1].copy()
+    rgb = read_image(path)
     reader = BoardReader(size=args.size)
     trace: dict[str, object] = {}
     t0 = time.perf_counter()
@@ -136,6 +139,8 @@ def add_parsers(sub: Any) -> None:
     so.add_argument("board", help='rows joined by |, e.g. "X..|.O.|..." (3x3) or 5 rows of 5 for 5x5')
     so.add_argument("--k", type=int, default=None, help="stones in a row to win (default 3 on 3x3, else 4)")
     so.add_argument("--no-book", action="store_true", help="search from scratch, without the opening book")
+    so.add_argument("--time-limit", type=float, default=60.0,
+                    help="seconds for an exact answer, else 'unknown' with exit 3 (default 60)")
     add_json(so)
     so.set_defaults(func=cmd_solve)
 

@@ -72,11 +72,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_tune(args: argparse.Namespace) -> int:
-    from kinegym.agents import train as T
 
     if args.trials < 1:
         raise UsageError(f"--trials {args.trials}; expected >= 1")
-    res = T.tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed)
+    if not 64 <= args.timesteps <= 10**9:
+        raise UsageError(f"--timesteps {args.timesteps}; expected 64..1e9 env steps per trial")
+    from kinegym.agents.tune import open_storage, tune
+
+    open_storage(args.storage)  # a bad storage is named before any trial starts
+    res = tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed)
     lines = [f"study {res['study']} on {res['storage']}: {res['trials']} trials ({res['complete']} complete, "
              f"{res['pruned']} pruned)", f"best validation success {res['best_value']}, params {res['best_params']}"]
     emit(args, res, "\n".join(lines))
