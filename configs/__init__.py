@@ -269,4 +269,7 @@ def resolve(kind: str, name_or_path: str | Path) -> Path:
 def load(kind: str, name_or_path: str | Path, schema: Mapping[str, Spec]) -> dict[str, Any]:
     """Read, parse and validate one configuration file (see :func:`resolve`)."""
     path = resolve(kind, name_or_path)
-    return validate(load_yaml(path), schema, source=str(path))
+    data = load_yaml(path)
+    if data is None:
+        raise ConfigError(str(path), "", "an empty file", "a mapping of keys to values")
+    return validate(data, schema, source=str(path))

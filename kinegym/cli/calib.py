@@ -64,6 +64,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from kinegym.kinematics.arm_errors import PARAMETERS, calibrate, load_measurements
     from kinegym.kinematics.writing_arm import WritingArm
 
+    if args.out and not args.out.lower().endswith((".yaml", ".yml")):
+        raise UsageError(f"--out {args.out!r}: expected a .yaml file (what --errors reads back)")
     fit = [f.strip() for f in args.fit.split(",") if f.strip()]
     bad = [f for f in fit if f not in PARAMETERS]
     if bad or not fit:

@@ -20,7 +20,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_NO_ANSWER", "EXIT_BROKEN_INSTALL", "UsageError", "Parser",
-           "parse_floats", "parse_triples", "emit", "rnd", "add_json", "write_text_atomic"]
+           "parse_floats", "parse_triples", "emit", "rnd", "add_json", "write_text_atomic", "out_dir"]
 
 EXIT_OK, EXIT_BROKEN_INSTALL, EXIT_USAGE, EXIT_NO_ANSWER = 0, 1, 2, 3
 
@@ -36,8 +36,14 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
+#: The largest magnitude a number on the command line may have (cm, deg, gains): beyond it
+#: products overflow to infinity and answers stop meaning anything.
+MAX_MAGNITUDE = 1e6
+
+
 def parse_floats(text: str, n: int, option: str) -> list[float]:
-    """``"1,2,3"`` -> ``[1.0, 2.0, 3.0]`` with exactly ``n`` finite numbers."""
+    """``"1,2,3"`` -> ``[1.0, 2.0, 3.0]`` with exactly ``n`` finite numbers within
+    ``+-MAX_MAGNITUDE``."""
     parts = [p.strip() for p in text.split(",")]
     try:
         vals = [float(p) for p in parts]
@@ -46,6 +52,9 @@ def parse_floats(text: str, n: int, option: str) -> list[float]:
     if len(vals) != n or not all(math.isfinite(v) for v in vals):
         shape = ",".join("N" * 1 for _ in range(n))
         raise UsageError(f"{option} {text!r} is not {n} finite numbers like {shape}")
+    big = [v for v in vals if abs(v) > MAX_MAGNITUDE]
+    if big:
+        raise UsageError(f"{option} {text!r}: {big[0]:g} is too large; expected numbers within +-{MAX_MAGNITUDE:g}")
     return vals
 
 
@@ -78,6 +87,21 @@ def rnd(x: Any, nd: int = 6) -> Any:
 def add_json(sp: argparse.ArgumentParser) -> None:
     """The ``--json`` switch every command has."""
     sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def out_dir(path: str | Path, option: str = "--out") -> Path:
+    """The folder ``path`` made (parents too), or a :class:`UsageError` naming ``option`` and why."""
+    out = Path(path)
+    for parent in [out, *out.parents]:
+        if parent.exists():
+            if not parent.is_dir():
+                raise UsageError(f"{option} {str(out)!r}: {str(parent)!r} is a file, not a folder")
+            break
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise UsageError(f"{option} {str(out)!r}: the folder cannot be made ({err.strerror or err})") from None
+    return out
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:

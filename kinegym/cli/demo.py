@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli.common import EXIT_OK, add_json, emit
+from kinegym.cli.common import EXIT_OK, add_json, emit, out_dir
 from kinegym.cli.kin import plot_climber
 
 __all__ = ["add_parsers", "cmd_demo"]
@@ -33,8 +33,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from kinegym.kinematics.holes import HoleMap
     from kinegym.kinematics.writing_arm import WritingArm
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = out_dir(args.out)
     t_start = time.perf_counter()
     rows: list[tuple[str, str, str]] = []
     files: list[str] = []

@@ -21,6 +21,7 @@ from kinegym.cli.common import (
     UsageError,
     add_json,
     emit,
+    out_dir,
     parse_floats,
     parse_triples,
     rnd,
@@ -229,7 +230,7 @@ def cmd_sensor_study(args: argparse.Namespace) -> int:
                      f"{r['centre_err_p99_cm']:8.4f} {r['grips_needed_median']:6.3g} {r['lost_within_3']:6.1%} "
                      f"{r['track_correct']:7.2%}")
     lines.append("(sigma in deg; err = centre error at the true holes in cm; grips = median grips from a lost start)")
-    out.mkdir(parents=True, exist_ok=True)
+    out_dir(out)
     xs = [r["sigma_deg"] for r in rows]
     chart = line_chart({"unique & correct (1 grip)": (xs, [r["correct"] for r in rows]),
                         "ambiguous (1 grip)": (xs, [r["ambiguous"] for r in rows]),
@@ -249,8 +250,8 @@ def climber_geometry(args: argparse.Namespace) -> Any:
 
     if args.link is None:
         return ClimberGeometry.from_config(args.robot)
-    if not (math.isfinite(args.link) and args.link > 0):
-        raise UsageError(f"--link {args.link!r} is not a length > 0 cm")
+    if not (math.isfinite(args.link) and 0 < args.link <= 10_000):
+        raise UsageError(f"--link {args.link!r} is not a length in 0..10000 cm")
     return ClimberGeometry.uniform(args.link)
 
 

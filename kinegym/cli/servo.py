@@ -83,6 +83,8 @@ def cmd_tune(args: argparse.Namespace) -> int:
     from kinegym.envs.sim.servo_tune import tune_joint, tuned_config
     from kinegym.progress import Progress
 
+    if args.out and not args.out.lower().endswith((".yaml", ".yml")):
+        raise UsageError(f"--out {args.out!r}: expected a .yaml file (what --arm reads back)")
     joints = [_joint(v) for v in args.joints.split(",") if v.strip()]
     if not joints or len(set(joints)) != len(joints):
         raise UsageError(f"--joints {args.joints!r}; expected distinct joints like 1,2,3")
