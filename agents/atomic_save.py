@@ -11,16 +11,18 @@ SB3 formats: ``sb3_contrib.MaskablePPO.load`` and ``VecNormalize.load`` read the
 from __future__ import annotations
 
 import io
+import os
 import pickle
 from pathlib import Path
 from typing import Any
 
 from sb3_contrib import MaskablePPO
+from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
 from kinegym.configs.io import write_atomic
 
-__all__ = ["AtomicMaskablePPO", "AtomicVecNormalize", "load_vecnormalize"]
+__all__ = ["AtomicMaskablePPO", "AtomicVecNormalize", "AtomicEvalCallback", "load_vecnormalize"]
 
 #: What a normalisation-statistics pickle may name: numpy arrays and scalars, SB3's running
 #: statistics and VecNormalize classes, spaces - no other callable is ever resolved.
@@ -79,6 +81,25 @@ class AtomicMaskablePPO(MaskablePPO):
         buf = io.BytesIO()
         super().save(buf, exclude, include)
         write_atomic(p, buf.getvalue(), what="model file")
+
+
+class AtomicEvalCallback(MaskableEvalCallback):
+    """MaskableEvalCallback whose ``evaluations.npz`` is replaced atomically after each
+    evaluation (SB3 rewrites it in place with ``np.savez``; the best model is saved through
+    the model's own atomic :meth:`AtomicMaskablePPO.save`)."""
+
+    def _on_step(self) -> bool:
+        final = self.log_path
+        if final is None:
+            return super()._on_step()
+        tmp = os.path.join(os.path.dirname(final), ".evaluations.tmp")
+        self.log_path = tmp  # np.savez writes tmp + ".npz"
+        try:
+            return super()._on_step()
+        finally:
+            self.log_path = final
+            if os.path.exists(tmp + ".npz"):
+                os.replace(tmp + ".npz", final + ".npz")
 
 
 class AtomicVecNormalize(VecNormalize):

@@ -268,8 +268,9 @@ def _time_limit(minutes: float | None) -> list[Any]:
 
 
 def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, make: EnvFactory, extra: Sequence[Any] = ()) -> list[Any]:
-    from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
     from stable_baselines3.common.callbacks import CheckpointCallback
+
+    from kinegym.agents.atomic_save import AtomicEvalCallback
 
     eval_env = _make_vec(cfg, 1, VALIDATION_SEED, None, subproc=False, make=make)
     if cfg["normalize"]:
@@ -279,7 +280,7 @@ def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, make: EnvFactory, ex
     every = max(1, cfg["eval_freq"] // n_envs)
     # the eval env is a DummyVecEnv of one, the training env a SubprocVecEnv: that is meant
     warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
-    ev = MaskableEvalCallback(eval_env, n_eval_episodes=cfg["eval_episodes"], eval_freq=every,
+    ev = AtomicEvalCallback(eval_env, n_eval_episodes=cfg["eval_episodes"], eval_freq=every,
                               best_model_save_path=str(run / "best"), log_path=str(run), deterministic=True,
                               callback_after_eval=extra[0] if extra else None, verbose=0)
     ck = CheckpointCallback(save_freq=max(1, cfg["checkpoint_freq"] // n_envs), save_path=str(run / "checkpoints"),
@@ -433,8 +434,11 @@ def _monitor_rows(run: Path) -> tuple[np.ndarray, np.ndarray]:
             header = fh.readline().strip().split(",")
             for line in fh:
                 vals = dict(zip(header, line.strip().split(",")))
-                ok = vals.get("is_success", "0") in ("True", "1", "1.0")
-                rows.append((float(vals["t"]), int(vals["l"]), float(ok)))
+                try:  # a run killed mid-line leaves a partial last row: skip it
+                    row = (float(vals["t"]), int(vals["l"]), float(vals.get("is_success", "0") in ("True", "1", "1.0")))
+                except (KeyError, ValueError):
+                    continue
+                rows.append(row)
     if not rows:
         return np.zeros(0), np.zeros(0)
     rows.sort()
@@ -452,10 +456,10 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
     for r in [*earlier, run]:
         ev = r / "evaluations.npz"
         if ev.is_file():
-            d = np.load(ev)
-            if "successes" in d and len(d["successes"]):
-                xs += d["timesteps"].tolist()
-                ys += d["successes"].mean(axis=1).tolist()
+            with np.load(ev) as d:
+                if "successes" in d and len(d["successes"]):
+                    xs += d["timesteps"].tolist()
+                    ys += d["successes"].mean(axis=1).tolist()
     if xs:
         order = np.argsort(xs)
         series["validation success (deterministic, masked)"] = (np.asarray(xs)[order], np.asarray(ys)[order])

@@ -72,6 +72,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     argv = _glue_negative_values(list(sys.argv[1:] if argv is None else argv))
     want_json = "--json" in argv
+    for name in ("stdout", "stderr"):  # a closed stream (``kinegym ... >&-``): write into the void
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w"))  # noqa: SIM115 - lives as long as the process
     from kinegym.agents.book import MissingBookError
 
     handlers: list[tuple[type[BaseException], int]] = [
@@ -87,11 +90,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         _check_common(args)
         func: Callable[[argparse.Namespace], int] = args.func
         code = func(args)
-        sys.stdout.flush()  # a closed pipe shows here, inside the handler below, not at exit
+        sys.stdout.flush()  # a closed pipe or a full disk shows here, inside the handlers below
         return code
     except BrokenPipeError:  # the reader went away (``kinegym ... | head``): stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
         return 141  # 128 + SIGPIPE, as a shell reports it
+    except OSError as err:
+        if err.filename is not None:  # a file the command opened: say which
+            print(f"kinegym: {err.filename}: {err.strerror or err}", file=sys.stderr)
+            return EXIT_USAGE
+        try:  # the output itself cannot be written (``> /dev/full``)
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            print(f"kinegym: cannot write the output ({err.strerror or err})", file=sys.stderr)
+        except OSError:
+            pass
+        return EXIT_USAGE
     except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]
         code = next(c for t, c in handlers if isinstance(exc, t))
         if want_json:
