@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 import kinegym.configs as _configs
+from kinegym.envs.errors import NoRouteError
 from kinegym.envs.sim.climber_model import ClimberModel
 from kinegym.envs.sim.gait import min_enclosing_circle
 from kinegym.kinematics.holes import HoleMap
@@ -127,7 +128,12 @@ def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> lis
     reach = min(model.reach[1])
     clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
     out = []
-    for st in itertools.permutations(low, 3):
+    low_set = set(low)
+    # only triples whose holes are pairwise within two reaches can fit (a wall's bottom row of a
+    # hundred holes would otherwise be a million permutations)
+    near = {i: [j for j in holes.within(xy[i], 2.0 * reach + 1e-9).tolist() if j in low_set and j != i] for i in low}
+    triples = ((i, j, k) for i in low for j, k in itertools.permutations(near[i], 2) if k in near[j])
+    for st in triples:
         pts = [tuple(xy[h]) for h in st]
         cx, cy, r = min_enclosing_circle(pts)
         if r <= reach and all(math.hypot(px - cx, py - cy) >= clear for px, py in pts):
@@ -242,6 +248,6 @@ class ClimbTask:
             if self.fixed_wall is not None:
                 break
         name = getattr(self.fixed_wall, "name", "generated")
-        raise RuntimeError(f"no route from the bottom to the top of wall '{name}' for robot '{self.robot_name}' "
+        raise NoRouteError(f"no route from the bottom to the top of wall '{name}' for robot '{self.robot_name}' "
                            f"(reach {self.reach:g} cm, spacing {(self.fixed_wall or holes).spacing:.1f} cm); "
                            f"a longer-armed robot (robot='climber_long') or a denser wall is needed")

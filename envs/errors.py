@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["InvalidActionError", "ResetNeededError", "check_action"]
+__all__ = ["InvalidActionError", "ResetNeededError", "NoRouteError", "check_action"]
 
 
 class InvalidActionError(ValueError):
@@ -29,6 +29,11 @@ class InvalidActionError(ValueError):
 
 class ResetNeededError(RuntimeError):
     """``step()`` without a live episode: call ``reset()`` first."""
+
+
+class NoRouteError(ValueError):
+    """A wall on which no climb from the bottom to the top exists for the robot (too few or
+    too far-apart holes for its reach): a task that cannot be posed."""
 
 
 def _short(valid: list[int]) -> str:

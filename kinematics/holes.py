@@ -32,6 +32,7 @@ WALL_SCHEMA: dict[str, _configs.Spec] = {
             "xy_cm": _configs.Vector(length=2),
         }),
         min_len=1,
+        max_len=250_000,
         doc="holes with id [col, row] and position xy_cm",
     ),
 }
@@ -99,6 +100,9 @@ class HoleMap:
     def spacing(self) -> float:
         """Median nearest-neighbour distance (cm); the cell size of the spatial hash."""
         cached = self.__dict__.get("_spacing")
+        if cached is None and len(self) < 2:
+            cached = 1.0  # one hole has no neighbour (nearest_other would search for ever)
+            object.__setattr__(self, "_spacing", cached)
         if cached is None:
             grid = _SpatialHash(self.xy, cell=max(1e-6, float(np.ptp(self.xy, axis=0).max()) / 64 or 1.0))
             d = [grid.nearest_other(i) for i in range(min(len(self), 400))]
@@ -120,11 +124,15 @@ class HoleMap:
         cfg = _configs.load("walls", name_or_path, WALL_SCHEMA)
         ids = np.array([h["id"] for h in cfg["holes"]], dtype=np.int64)
         xy = np.array([h["xy_cm"] for h in cfg["holes"]], dtype=np.float64)
+        src = str(_configs.resolve("walls", name_or_path))
+        cells = np.floor(xy / 0.1)
+        if len(np.unique(cells, axis=0)) < len(cells):
+            raise _configs.ConfigError(src, "holes", "two holes at one place",
+                                       "holes at least 0.1 cm apart (xy_cm)")
         try:
             return cls(ids=ids, xy=xy, name=cfg["name"])
         except InvalidInputError as exc:
-            raise _configs.ConfigError(str(_configs.resolve("walls", name_or_path)), "holes",
-                                       "duplicate id", str(exc)) from exc
+            raise _configs.ConfigError(src, "holes", "duplicate id", str(exc)) from exc
 
     @classmethod
     def grid(
@@ -191,6 +199,8 @@ class _SpatialHash:
                         dtype=np.int64)
 
     def nearest_other(self, i: int) -> float:
+        if len(self.xy) < 2:
+            return math.inf
         r = self.cell
         while True:
             idx = [j for j in self.within_list(*self.pts[i], r) if j != i]

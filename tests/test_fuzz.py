@@ -260,3 +260,28 @@ def test_the_console_script_never_shows_a_traceback(files: dict[str, Path]) -> N
                  ["read-board", str(files["png_binary"])], ["follow", "--gif", str(files["file"] / "a.gif")]):
         r = subprocess.run([sys.executable, "-m", "kinegym", *argv], capture_output=True, text=True, timeout=120)
         assert r.returncode == 2 and "Traceback" not in r.stderr + r.stdout, r.stderr[-500:]
+
+
+@pytest.mark.parametrize("argv", [
+    ["match", "--games", "1000000000000"], ["climb", "--episodes", "99999999999999999999"],
+    ["sensor-study", "--trials", "4294967296"], ["sensor-study", "--walks", "1000000000000"],
+    ["sensor-study", "--sigmas", ",".join(["0.1"] * 40)], ["evaluate", "gait", "--policy", "x.zip", "--episodes", "0"],
+    ["localize", "--angles", "-24,85;78,55;-155,103", "--sigma", "1e12"],
+    ["localize", "--angles", "-24,85;78,55;-155,103", "--map-sigma", "1e12"],
+    ["localize", "--angles", "-24,85;78,55;-155,103", "--wall", "grid:3000x3000"],
+    ["train", "gait", "--timesteps", "1000000000000"], ["tune", "gait", "--storage", "x", "--study", "s",
+                                                        "--trials", "0"]])
+def test_unbounded_work_is_refused_with_the_maximum(argv: list[str]) -> None:
+    """11 counts and sizes past their maxima (each once made a run hang): exit 2 at once."""
+    code, text = _run(argv, limit_s=10)
+    assert code == 2 and ("expected" in text or " in 0.." in text) and "Traceback" not in text, (argv, text)
+
+
+def test_degenerate_walls_end_cleanly(tmp_path: Path) -> None:
+    one, same = tmp_path / "one.yaml", tmp_path / "same.yaml"
+    one.write_text("name: one\nholes:\n  - {id: [1, 1], xy_cm: [0.0, 0.0]}\n")
+    same.write_text("name: same\nholes:\n" + "".join(f"  - {{id: [{i}, 1], xy_cm: [0.0, 0.0]}}\n" for i in range(5)))
+    code, text = _run(["climb", "--episodes", "1", "--wall", str(one)])
+    assert code == 3 and "no route" in text
+    code, text = _run(["sensor-study", "--trials", "10", "--walks", "1", "--wall", str(same), "--out", str(tmp_path)])
+    assert code == 2 and "0.1 cm apart" in text

@@ -159,8 +159,14 @@ def test_fixed_walls_and_their_limits() -> None:
     env = gym.make(ENV_ID, wall="seed_4x4", robot="climber_long")
     obs, info = env.reset(seed=0)
     assert info["wall"] == "seed_4x4" and info["planner_moves"] > 0
-    with pytest.raises(RuntimeError, match="climber_long"):
+    from kinegym.envs.errors import NoRouteError
+
+    with pytest.raises(NoRouteError, match="climber_long"):
         gym.make(ENV_ID, wall="seed_4x4", robot="climber").reset(seed=0)
+    with pytest.raises(ValueError, match="wall_kwargs"):
+        HoleClimbEnv(wall_kwargs={"cols": 100_000})
+    with pytest.raises(ValueError, match="wall_kwargs"):
+        HoleClimbEnv(wall_kwargs={"missing": 0.99})
     with pytest.raises(ValueError, match="mode"):
         HoleClimbEnv(mode="dream")
     with pytest.raises(ValueError, match="wall_kwargs"):

@@ -57,15 +57,17 @@ def _check_common(args: argparse.Namespace) -> None:
     seed = getattr(args, "seed", None)
     if isinstance(seed, int) and not 0 <= seed < 2**32:
         raise UsageError(f"--seed {seed}; expected an integer in 0..{2**32 - 1}")
-    for name in ("episodes", "games", "trials", "evals"):
+    caps = {"episodes": 10_000, "games": 100_000, "trials": 1_000_000, "evals": 2_000, "timesteps": 10**9}
+    for name, cap in caps.items():
         v = getattr(args, name, None)
-        if isinstance(v, int) and v < 1:
-            raise UsageError(f"--{name} {v}; expected an integer >= 1")
+        if isinstance(v, int) and not 1 <= v <= cap:
+            raise UsageError(f"--{name.replace('_', '-')} {v}; expected an integer in 1..{cap:,}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code (also used by the ``kinegym`` script)."""
     from kinegym.configs import ConfigError
+    from kinegym.envs.errors import InvalidActionError, NoRouteError
     from kinegym.envs.game import GameError
     from kinegym.kinematics.errors import InvalidInputError, UnreachableError
     from kinegym.vision.errors import NoBoardError, VisionError
@@ -81,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         (MissingBookError, EXIT_BROKEN_INSTALL),
         (UsageError, EXIT_USAGE), (ConfigError, EXIT_USAGE), (InvalidInputError, EXIT_USAGE),
         (UnreachableError, EXIT_NO_ANSWER), (NoBoardError, EXIT_NO_ANSWER), (VisionError, EXIT_USAGE),
-        (GameError, EXIT_USAGE),
+        (GameError, EXIT_USAGE), (NoRouteError, EXIT_NO_ANSWER), (InvalidActionError, EXIT_USAGE),
     ]
     try:
         args = build_parser().parse_args(argv)

@@ -129,6 +129,12 @@ def _wall(spec: str, args: argparse.Namespace) -> Any:
             cols, rows = (int(v) for v in spec[5:].lower().split("x"))
         except ValueError:
             raise UsageError(f"--wall {spec!r} is not grid:COLSxROWS, e.g. grid:50x50") from None
+        if not (2 <= cols <= 1000 and 2 <= rows <= 1000 and cols * rows <= 250_000):
+            raise UsageError(f"--wall {spec!r}: expected 2..1000 columns and rows, at most 250,000 holes")
+        if not (math.isfinite(args.spacing) and 1 <= args.spacing <= 1000):
+            raise UsageError(f"--spacing {args.spacing!r}; expected 1..1000 cm")
+        if not (math.isfinite(args.jitter) and 0 <= args.jitter < args.spacing / 2):
+            raise UsageError(f"--jitter {args.jitter!r}; expected 0 <= jitter < spacing / 2 cm")
         return HoleMap.grid(cols, rows, spacing=args.spacing, jitter=args.jitter, seed=args.seed)
     return HoleMap.from_config(spec)
 
@@ -137,14 +143,14 @@ def _noise(args: argparse.Namespace, geom: Any) -> Any:
     from kinegym.kinematics.pose_fit import NoiseModel
 
     if args.tolerance is not None:
-        if not (math.isfinite(args.tolerance) and args.tolerance > 0):
-            raise UsageError(f"--tolerance {args.tolerance!r} is not a length > 0 cm")
+        if not (math.isfinite(args.tolerance) and 0 < args.tolerance <= 20):
+            raise UsageError(f"--tolerance {args.tolerance!r} is not a length in 0..20 cm")
         return NoiseModel(tolerance=args.tolerance)
     sigma = math.degrees(geom.sensor_sigma) if args.sigma is None else args.sigma
-    if not (math.isfinite(sigma) and sigma > 0):
-        raise UsageError(f"--sigma {sigma!r} is not an angle > 0 deg")
-    if not (math.isfinite(args.map_sigma) and args.map_sigma >= 0):
-        raise UsageError(f"--map-sigma {args.map_sigma!r} is not a length >= 0 cm")
+    if not (math.isfinite(sigma) and 0 < sigma <= 10):
+        raise UsageError(f"--sigma {sigma!r} is not an angle in 0..10 deg (beyond it no grip tells holes apart)")
+    if not (math.isfinite(args.map_sigma) and 0 <= args.map_sigma <= 5):
+        raise UsageError(f"--map-sigma {args.map_sigma!r} is not a length in 0..5 cm")
     return NoiseModel(sigma_angle=math.radians(sigma), sigma_map=args.map_sigma)
 
 
@@ -210,10 +216,11 @@ def cmd_sensor_study(args: argparse.Namespace) -> int:
     from kinegym.progress import Progress
 
     sigmas = [float(v) for v in parse_floats(args.sigmas, len(args.sigmas.split(",")), "--sigmas")]
-    if any(s <= 0 for s in sigmas):
-        raise UsageError(f"--sigmas {args.sigmas!r} must all be > 0 deg")
-    if args.trials < 1 or args.walks < 0:
-        raise UsageError(f"--trials {args.trials} / --walks {args.walks}: need trials >= 1, walks >= 0")
+    if not (1 <= len(sigmas) <= 20 and all(0 < s <= 10 for s in sigmas)):
+        raise UsageError(f"--sigmas {args.sigmas!r}: expected 1..20 angles in 0..10 deg")
+    if not (1 <= args.trials <= 1_000_000 and 0 <= args.walks <= 100_000):
+        raise UsageError(f"--trials {args.trials} / --walks {args.walks}: expected trials 1..1000000, walks "
+                         "0..100000")
     geom = climber_geometry(args)
     wall = _wall(args.wall, args)
     out = Path(args.out)
