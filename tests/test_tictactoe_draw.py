@@ -243,6 +243,12 @@ def test_kinegym_play_terminal_mode_with_scripted_stdin(monkeypatch: pytest.Monk
     assert "the manipulator is drawing O" in out and "reading the board" in out
     result = json.loads(out.strip().splitlines()[-1])
     assert result["winner"] in ("O", "draw")  # the person cannot beat the solver
+    # the board shown at each of the person's turns includes the arm's latest mark
+    lines = out.splitlines()
+    boards = ["".join(lines[i + 1:i + 4]) for i, ln in enumerate(lines) if "the board, your move" in ln]
+    assert len(boards) >= 3
+    for i, b in enumerate(boards):
+        assert (b.count("X"), b.count("O")) == (i, i), (i, b)
 
     monkeypatch.setattr("sys.stdin", io.StringIO("q\n"))
     assert main(["play", "--board", "3", "--fast"]) == 0

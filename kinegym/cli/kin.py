@@ -143,12 +143,12 @@ def _noise(args: argparse.Namespace, geom: Any) -> Any:
     from kinegym.kinematics.pose_fit import NoiseModel
 
     if args.tolerance is not None:
-        if not (math.isfinite(args.tolerance) and 0 < args.tolerance <= 20):
-            raise UsageError(f"--tolerance {args.tolerance!r} is not a length in 0..20 cm")
+        if not (math.isfinite(args.tolerance) and 0.001 <= args.tolerance <= 20):
+            raise UsageError(f"--tolerance {args.tolerance!r} is not a length in 0.001..20 cm")
         return NoiseModel(tolerance=args.tolerance)
     sigma = math.degrees(geom.sensor_sigma) if args.sigma is None else args.sigma
-    if not (math.isfinite(sigma) and 0 < sigma <= 10):
-        raise UsageError(f"--sigma {sigma!r} is not an angle in 0..10 deg (beyond it no grip tells holes apart)")
+    if not (math.isfinite(sigma) and 0.001 <= sigma <= 10):
+        raise UsageError(f"--sigma {sigma!r} is not an angle in 0.001..10 deg (beyond it no grip tells holes apart)")
     if not (math.isfinite(args.map_sigma) and 0 <= args.map_sigma <= 5):
         raise UsageError(f"--map-sigma {args.map_sigma!r} is not a length in 0..5 cm")
     return NoiseModel(sigma_angle=math.radians(sigma), sigma_map=args.map_sigma)
@@ -216,8 +216,8 @@ def cmd_sensor_study(args: argparse.Namespace) -> int:
     from kinegym.progress import Progress
 
     sigmas = [float(v) for v in parse_floats(args.sigmas, len(args.sigmas.split(",")), "--sigmas")]
-    if not (1 <= len(sigmas) <= 20 and all(0 < s <= 10 for s in sigmas)):
-        raise UsageError(f"--sigmas {args.sigmas!r}: expected 1..20 angles in 0..10 deg")
+    if not (1 <= len(sigmas) <= 20 and all(0.001 <= s <= 10 for s in sigmas)):
+        raise UsageError(f"--sigmas {args.sigmas!r}: expected 1..20 angles in 0.001..10 deg")
     if not (1 <= args.trials <= 1_000_000 and 0 <= args.walks <= 100_000):
         raise UsageError(f"--trials {args.trials} / --walks {args.walks}: expected trials 1..1000000, walks "
                          "0..100000")

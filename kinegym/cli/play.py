@@ -53,11 +53,11 @@ class TerminalPerson:
 
     draws_itself = False
 
-    def __init__(self, stdin: TextIO, stdout: TextIO, n: int, show: Callable[[], None]) -> None:
+    def __init__(self, stdin: TextIO, stdout: TextIO, n: int, show: Callable[..., None]) -> None:
         self.stdin, self.stdout, self.n, self.show = stdin, stdout, n, show
 
     def __call__(self, board: Any) -> int:
-        self.show()
+        self.show(board=board)  # the board as it stands, the arm's latest mark included
         while True:
             self.stdout.write(f"your move: ROW,COL (0..{self.n - 1}, row 0 at the top), or q to quit: ")
             self.stdout.flush()
@@ -181,14 +181,20 @@ def cmd_play(args: argparse.Namespace) -> int:
     player = make_player(args.opponent, seed=args.seed)
     shown = [0]
 
-    def show_status(info: dict[str, Any] | None = None) -> None:
+    def show_status(info: dict[str, Any] | None = None, board: Any = None) -> None:
+        """The env's new status messages, then the board: as it stands when it is the person's
+        turn (``board``, the arm's latest mark included), else as the camera last read it."""
         msgs = env._status[shown[0]:]
         for m in msgs:
             out.write(f"  [{m}]\n")
         shown[0] = len(env._status)
-        if info is not None or msgs:
-            rows = ["|".join(" " + ("." if v == 0 else "XO"[int(v) - 1]) + " " for v in row) for row in env.belief]
-            out.write("  board as read:\n" + "\n".join("    " + r for r in rows) + "\n")
+        if board is not None:
+            cells, title = np.asarray(board.cells()), "the board, your move"
+        else:
+            cells, title = env.belief, "board as read"
+        if info is not None or msgs or board is not None:
+            rows = ["|".join(" " + ("." if v == 0 else "XO"[int(v) - 1]) + " " for v in row) for row in cells]
+            out.write(f"  {title}:\n" + "\n".join("    " + r for r in rows) + "\n")
         out.flush()
 
     person: Any
