@@ -23,11 +23,11 @@ __all__ = ["main", "build_parser", "UsageError"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The whole ``kinegym`` parser: every command group adds its subcommands."""
-    from kinegym.cli import arm, calib, climb, demo, follow, game, kin, play, servo, train
+    from kinegym.cli import arm, calib, climb, demo, follow, game, gui, kin, play, servo, train
 
     p = Parser(prog="kinegym", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (demo, kin, game, climb, follow, arm, calib, servo, play, train):
+    for group in (demo, kin, game, climb, follow, arm, calib, servo, play, gui, train):
         group.add_parsers(sub)
     return p
 
@@ -97,6 +97,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (``kinegym ... | head``): stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
         return 141  # 128 + SIGPIPE, as a shell reports it
+    except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]
+        code = next(c for t, c in handlers if isinstance(exc, t))
+        if want_json:
+            print(json.dumps({"error": type(exc).__name__, "message": str(exc),
+                              **getattr(exc, "details", {})}))
+        print(f"kinegym: {exc}" if not str(exc).startswith("kinegym") else str(exc), file=sys.stderr)
+        return code
     except OSError as err:
         if err.filename is not None:  # a file the command opened: say which
             print(f"kinegym: {err.filename}: {err.strerror or err}", file=sys.stderr)
@@ -107,13 +114,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         except OSError:
             pass
         return EXIT_USAGE
-    except tuple(h[0] for h in handlers) as exc:  # type: ignore[misc]
-        code = next(c for t, c in handlers if isinstance(exc, t))
-        if want_json:
-            print(json.dumps({"error": type(exc).__name__, "message": str(exc),
-                              **getattr(exc, "details", {})}))
-        print(f"kinegym: {exc}" if not str(exc).startswith("kinegym") else str(exc), file=sys.stderr)
-        return code
 
 
 

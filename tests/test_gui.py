@@ -1,0 +1,86 @@
+"""The interactive windows, driven by synthetic events through the real pygame loop
+(``SDL_VIDEODRIVER=dummy``): state and a screenshot are checked."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+pytest.importorskip("pygame")
+
+
+def _px(app, xy):  # type: ignore[no-untyped-def]
+    p = app.canvas.px(np.asarray(xy))
+    return int(p[0]), int(p[1])
+
+
+def test_climber_window_reproduces_the_seed_and_follows_clicks(tmp_path: Path) -> None:
+    import pygame as pg
+
+    from kinegym.gui.climber import SEED_CENTRE, ClimberApp
+    from kinegym.gui.window import mouse_events, run
+    from kinegym.kinematics.climber import inverse_program
+
+    app = ClimberApp()
+    hole = app.wall.xy[5].copy()  # hole (2, 2)
+    centre_px = _px(app, [9.0, 9.0])
+    shot = tmp_path / "climber.png"
+    script = [(1, "e"), (2, "h"), (3, "2"), (4, mouse_events(pg, "down", _px(app, hole))),
+              (5, mouse_events(pg, "up", _px(app, hole))), (6, "c"), (7, mouse_events(pg, "down", centre_px)),
+              (8, mouse_events(pg, "move", (centre_px[0] + 8, centre_px[1]), held=True)),
+              (9, mouse_events(pg, "up", (centre_px[0] + 8, centre_px[1])))]
+    stats = run(app, fps=120, script=script, max_frames=12, screenshot=shot)
+    assert stats.frames == 12
+    assert np.array_equal(app.holes[1], hole) and app.arm == 2  # arm 2 took the hole, arm 3 is next
+    want = app._world((centre_px[0] + 8, centre_px[1]))
+    assert np.allclose(app.centre, want) and not np.allclose(app.centre, SEED_CENTRE)
+    assert app.q is not None
+    assert np.allclose(app.q, inverse_program(app.holes, app.centre, 0.0, app.geom))
+    from kinegym.vision.image_io import read_image
+
+    img = read_image(shot)
+    assert img.shape == (app.size[1], app.size[0], 3) and img.std() > 20
+
+
+def test_climber_window_shows_the_seed_numbers() -> None:
+    from kinegym.gui.climber import ClimberApp, centre_angles
+    from kinegym.gui.widgets import Event
+    from kinegym.gui.window import drive
+
+    app = ClimberApp()
+    drive(app, [Event("key", key="e")])
+    text = "\n".join(app.readout.lines)
+    assert "angulo1 =  -69.4851  101.1454" in text and "xR = 6.6289 cm" in text
+    th = np.degrees(centre_angles(app.holes, app.centre))
+    assert abs(th.sum() - 360.0) < 1e-9  # the centre lies inside the hole triangle
+    drive(app, [Event("key", key="b")])  # the other elbows: still the same hands
+    from kinegym.kinematics.climber import hand_positions
+
+    assert np.allclose(hand_positions(app.q, app.geom), app.holes - app.centre)
+    drive(app, [Event("key", key="c"), Event("down", _px(app, [58.0, 58.0]))])
+    assert app.q is None and "unreachable" in "\n".join(app.readout.lines)
+
+
+def test_gui_cli_records_and_refuses_without_a_display(tmp_path: Path) -> None:
+    shot = tmp_path / "g.png"
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    r = subprocess.run([sys.executable, "-m", "kinegym", "gui", "climber", "--frames", "5", "--keys", "e@1",
+                        "--screenshot", str(shot)], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0 and shot.stat().st_size > 10_000, r.stderr
+    r = subprocess.run([sys.executable, "-m", "kinegym", "gui", "climber"], capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert r.returncode == 2 and "--frames" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_no_gui_code_in_the_light_imports() -> None:
+    code = ("import sys, kinegym, kinegym.cli, kinegym.envs.hole_climb; "
+            "bad = [m for m in sys.modules if m.startswith(('pygame', 'kinegym.gui'))]; print(bad); "
+            "sys.exit(1 if bad else 0)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
