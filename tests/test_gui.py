@@ -84,3 +84,32 @@ def test_no_gui_code_in_the_light_imports() -> None:
             "sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_arm_window_draws_live_and_stops(tmp_path: Path) -> None:
+    from kinegym.gui.arm import ArmApp
+    from kinegym.gui.widgets import Event
+    from kinegym.gui.window import drive, run
+
+    app = ArmApp(time_scale=20.0)
+    drive(app, [Event("key", key="l"), Event("key", key="]"), Event("key", key="]"), Event("key", key="]"),
+                Event("key", key="space")])
+    assert app.drawing and app.shape.value == "lines" and app.speed.value == 5
+    assert app.sim.canvas.ink().max() == 0 or app.run.i > 0
+    for _ in range(2000):
+        if not app.drawing:
+            break
+        app.update(1 / 30)
+    assert not app.drawing and app.status.startswith("done: lines")
+    assert app.sim.canvas.ink().max() > 0.3  # the lines are on the board
+    # a big O (past the cell, as the thesis's 10 cm slider) is drawn about the field's centre
+    drive(app, [Event("key", key="o")] + [Event("key", key="=")] * 8)
+    assert app.size_cm.value == 7.0 and len(app.strokes()) == 1
+    # trigger, then stop midway: the run ends where the arm is
+    shot = tmp_path / "arm.png"
+    stats = run(app, fps=60, script=[(1, "space"), (12, "backspace")], max_frames=16, screenshot=shot)
+    assert stats.frames == 16 and app.run is None and app.status.startswith("stopped after")
+    from kinegym.vision.image_io import read_image
+
+    img = read_image(shot)
+    assert img.shape == (app.size[1], app.size[0], 3) and img.std() > 20

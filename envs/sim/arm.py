@@ -362,43 +362,26 @@ class ArmSim:
 
         ``progress(done, total)`` is called about 100 times; ``on_frame(sim)`` every
         ``frame_every_s`` simulated seconds (e.g. to collect :meth:`render` frames for a GIF).
+        :meth:`start` does the same in slices (a window steps it between frames).
         """
+        r = self.start(traj, q_ref)
+        every = max(1, r.n // 100)
+        frame_every = max(1, int(round(frame_every_s / self.dt)))
+        while not r.done:
+            i = r.i
+            r.advance(1)
+            if progress is not None and (i % every == 0 or i == r.n - 1):
+                progress(i + 1, r.n)
+            if on_frame is not None and i % frame_every == 0:
+                r.show_ink()
+                on_frame(self)
+        return r.finish()
+
+    def start(self, traj: Trajectory, q_ref: np.ndarray | None = None) -> ArmRun:
+        """A run of ``traj`` to advance tick by tick (:class:`ArmRun`); :meth:`run` runs it whole."""
         if abs(traj.dt - self.dt) > 1e-12:
             raise ValueError(f"trajectory dt {traj.dt} s; this arm's servo tick is {self.dt} s")
-        qr = self.joint_targets(traj) if q_ref is None else np.asarray(q_ref, float)
-        n = len(qr)
-        w_ff = np.zeros_like(qr)
-        if n > 1:
-            w_ff[1:] = np.diff(qr, axis=0) / self.dt
-        w_ff = np.clip(w_ff, -np.array([jp.max_speed for jp in self.joints]),
-                       np.array([jp.max_speed for jp in self.joints]))
-        q_enc = np.empty((n, 4))
-        q_true = np.empty((n, 4))
-        torque = np.empty((n, 4))
-        contact = np.empty(n)
-        qr_l, wf_l = qr.tolist(), w_ff.tolist()
-        every = max(1, n // 100)
-        frame_every = max(1, int(round(frame_every_s / self.dt)))
-        for i in range(n):
-            torque[i] = self._tick(qr_l[i], wf_l[i])
-            q_enc[i] = self.q_enc()
-            q_true[i] = self.phys.q_true()
-            contact[i] = self.contact_n
-            if progress is not None and (i % every == 0 or i == n - 1):
-                progress(i + 1, n)
-            if on_frame is not None and i % frame_every == 0:
-                if self._ink:  # show the ink drawn so far
-                    last = self._ink[-1]
-                    self._flush_ink()
-                    self._ink = [last]
-                on_frame(self)
-        if self._ink:
-            self._flush_ink()
-        if n:
-            self.q_cmd = qr[-1].copy()
-            self.last_torque = torque[-1].copy()
-        return Recording(self.arm, self.dt, traj.pose.copy(), qr, q_enc, q_true, torque, self.arm.fk(q_true),
-                         contact, traj.tool.copy(), traj.stroke.copy(), traj.hold.copy())
+        return ArmRun(self, traj, self.joint_targets(traj) if q_ref is None else np.asarray(q_ref, float))
 
     def pose_cmd(self) -> np.ndarray:
         """The pen pose the arm is commanded to (FK of the last joint targets)."""
@@ -543,3 +526,58 @@ class ArmSim:
     def __getstate__(self) -> dict[str, Any]:
         raise TypeError("ArmSim holds a pymunk space mid-motion and does not pickle; rebuild it and replay "
                         "(the TicTacToeDraw env pickles by replaying its actions)")
+
+
+class ArmRun:
+    """One trajectory being tracked: :meth:`advance` steps ``ticks`` servo ticks, ``i`` of ``n``
+    are done; :meth:`recording` is what was recorded so far, :meth:`finish` ends the run (the
+    ink flushed, the arm's command updated) and returns the whole recording."""
+
+    def __init__(self, sim: ArmSim, traj: Trajectory, qr: np.ndarray) -> None:
+        self.sim, self.traj, self.qr, self.n, self.i = sim, traj, qr, len(qr), 0
+        w_ff = np.zeros_like(qr)
+        if self.n > 1:
+            w_ff[1:] = np.diff(qr, axis=0) / sim.dt
+        lim = np.array([jp.max_speed for jp in sim.joints])
+        w_ff = np.clip(w_ff, -lim, lim)
+        self.q_enc, self.q_true = np.empty((self.n, 4)), np.empty((self.n, 4))
+        self.torque, self.contact = np.empty((self.n, 4)), np.empty(self.n)
+        self._qr, self._wf = qr.tolist(), w_ff.tolist()
+
+    @property
+    def done(self) -> bool:
+        return self.i >= self.n
+
+    def advance(self, ticks: int) -> int:
+        """Step up to ``ticks`` servo ticks; returns how many were stepped."""
+        sim, k = self.sim, 0
+        while k < ticks and self.i < self.n:
+            i = self.i
+            self.torque[i] = sim._tick(self._qr[i], self._wf[i])
+            self.q_enc[i] = sim.q_enc()
+            self.q_true[i] = sim.phys.q_true()
+            self.contact[i] = sim.contact_n
+            self.i, k = i + 1, k + 1
+        return k
+
+    def show_ink(self) -> None:
+        """Put the ink drawn so far on the canvas (the stroke in progress continues)."""
+        if self.sim._ink:
+            last = self.sim._ink[-1]
+            self.sim._flush_ink()
+            self.sim._ink = [last]
+
+    def recording(self) -> Recording:
+        m, t = self.i, self.traj
+        return Recording(self.sim.arm, self.sim.dt, t.pose[:m].copy(), self.qr[:m], self.q_enc[:m], self.q_true[:m],
+                         self.torque[:m], self.sim.arm.fk(self.q_true[:m]), self.contact[:m], t.tool[:m].copy(),
+                         t.stroke[:m].copy(), t.hold[:m].copy())
+
+    def finish(self) -> Recording:
+        sim = self.sim
+        if sim._ink:
+            sim._flush_ink()
+        if self.i:
+            sim.q_cmd = self.qr[self.i - 1].copy()
+            sim.last_torque = self.torque[self.i - 1].copy()
+        return self.recording()

@@ -63,6 +63,14 @@ def _climber(a: argparse.Namespace) -> Any:
     return ClimberApp(a.wall, a.robot)
 
 
+def _arm(a: argparse.Namespace) -> Any:
+    from kinegym.gui.arm import ArmApp
+
+    if not (0.1 <= a.time_scale <= 20):
+        raise UsageError(f"--time-scale {a.time_scale}; expected 0.1..20 x real time")
+    return ArmApp(a.arm, a.time_scale)
+
+
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--frames", type=int, default=None, help="close after this many frames (recording, tests)")
     p.add_argument("--screenshot", default=None, help="save the last frame here (PNG/JPEG)")
@@ -82,3 +90,8 @@ def add_parsers(sub: Any) -> None:
     c.add_argument("--robot", default="climber", help="robot config name or YAML path")
     c.set_defaults(make_app=_climber, title="kinegym - climber inverse program")
     _common(c)
+    a = gs.add_parser("arm", help="seed 003's operational GUI: shape, size, speed, trigger, live plots")
+    a.add_argument("--arm", default="thesis_rrrr", help="arm config name or YAML path")
+    a.add_argument("--time-scale", type=float, default=1.0, help="simulated seconds per real second (default 1)")
+    a.set_defaults(make_app=_arm, title="kinegym - writing arm")
+    _common(a)
