@@ -200,6 +200,8 @@ class TicTacToeDrawEnv(gym.Env):
                 self.sim.canvas.erase(st.points, sp["width_cm"], sp["efficiency"])
             else:
                 self.sim.canvas.stroke(st.points, self.sim.pen)
+            if self.on_frame is not None:  # ideal strokes: a frame per stroke
+                self.on_frame(self._frame())
 
     def _arm_mark(self, cell: int) -> None:
         from kinegym.envs.sim import strokes as S

@@ -113,3 +113,75 @@ def test_arm_window_draws_live_and_stops(tmp_path: Path) -> None:
 
     img = read_image(shot)
     assert img.shape == (app.size[1], app.size[0], 3) and img.std() > 20
+
+
+def test_play_window_controls_symbol_play_draw_and_stop(monkeypatch: pytest.MonkeyPatch,
+                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    """The game window driven by scripted events: choose O, Play, the arm (X) draws its move
+    (frames shown as it draws), the person draws an O with the mouse in a free cell, Enter;
+    at the next turn Stop ends the game and Esc the program."""
+    import json
+
+    import pygame as pg
+
+    from kinegym.cli import main
+    from kinegym.cli import play as P
+
+    monkeypatch.setattr(P, "display_available", lambda: True)
+    state = {"phase": 0, "person": None, "arm_frames": 0}
+    orig_init, orig_frame = P.WindowPerson.__init__, P.WindowPerson._arm_frame
+
+    def init(self, env, symbol="X"):  # type: ignore[no-untyped-def]
+        orig_init(self, env, symbol)
+        state["person"] = self
+
+    def arm_frame(self, frame):  # type: ignore[no-untyped-def]
+        state["arm_frames"] += 1
+        return orig_frame(self, frame)
+
+    monkeypatch.setattr(P.WindowPerson, "__init__", init)
+    monkeypatch.setattr(P.WindowPerson, "_arm_frame", arm_frame)
+    queue: list = []
+
+    def cell_px(person, cell):  # type: ignore[no-untyped-def]
+        lay, n = person.env.layout, person.env.n
+        r, c = divmod(cell, n)
+        centre = np.asarray(lay.field_origin) + [(c + 0.5) * lay.cell, (n - 1 - r + 0.5) * lay.cell]
+        x0, _, _, y1 = person.box
+        p = centre + np.asarray(person.env.sim.layout.canvas_origin)
+        return int((p[0] - x0) * 20.0), int((y1 - p[1]) * 20.0)
+
+    def wait():  # type: ignore[no-untyped-def]
+        if not queue:
+            person = state["person"]
+            if state["phase"] == 0:  # the lobby: choose O, Play
+                queue.extend([P_key("o"), P_key("p")])
+            elif state["phase"] == 1:  # first turn: draw an O in a free cell
+                free = next(i for i in range(9) if person.env.true_board.is_legal(i))
+                u, v = cell_px(person, free)
+                state["cell"] = free
+                ring = [(u + int(15 * np.cos(a)), v + int(15 * np.sin(a))) for a in np.linspace(0, 6.4, 24)]
+                queue.append(pg.event.Event(pg.MOUSEBUTTONDOWN, pos=ring[0], button=1))
+                queue.extend(pg.event.Event(pg.MOUSEMOTION, pos=p, rel=(0, 0), buttons=(1, 0, 0)) for p in ring)
+                queue.extend([pg.event.Event(pg.MOUSEBUTTONUP, pos=ring[-1], button=1), P_key("return")])
+            elif state["phase"] == 2:  # second turn: Stop
+                queue.append(P_key("s"))
+            else:  # back in the lobby: Esc
+                queue.append(P_key("escape"))
+            state["phase"] += 1
+        return queue.pop(0)
+
+    def P_key(name):  # type: ignore[no-untyped-def]
+        return pg.event.Event(pg.KEYDOWN, key=pg.key.key_code(name), mod=0, unicode="", scancode=0)
+
+    monkeypatch.setattr(pg.event, "wait", wait)
+    monkeypatch.setattr(pg.event, "get", lambda *a, **k: [])
+    assert main(["play", "--board", "3", "--fast", "--no-erase", "--json"]) == 0
+    out = capsys.readouterr().out
+    res = json.loads(out.strip().splitlines()[-1])
+    assert res["games"][0]["symbol"] == "O" and res["games"][0]["winner"] == "stopped"
+    assert "game stopped" in out and "you left the game" in out
+    person = state["person"]
+    assert state["arm_frames"] > 0  # the arm's move was shown as it drew
+    assert person.env.true_board.cells()[state["cell"] // 3][state["cell"] % 3] == 2  # the person's O
+    assert person.last.shape[1] == person.fw + P._PANEL and person.last.std() > 20

@@ -79,36 +79,102 @@ class TerminalPerson:
             return cell
 
 
+class StopGame(Exception):
+    """The person pressed Stop: this game ends, the window stays."""
+
+
+_PANEL = 250
+
+
 class WindowPerson:
     """The person drawing with the mouse in a pygame window (``draws_itself``: the strokes
-    are inked on the board as drawn)."""
+    are inked on the board as drawn), with the thesis game GUI's controls on the right:
+    your symbol (``x``/``o``), Play (``p``), Stop (``s``), the board as the camera read it,
+    and the status messages. The arm's moves are shown as it draws them."""
 
     draws_itself = True
 
-    def __init__(self, env: Any) -> None:
-        import pygame
+    def __init__(self, env: Any, symbol: str = "X") -> None:
+        from kinegym.gui.widgets import Button, Choice, Label, Panel
+        from kinegym.gui.window import pygame_or_hint
 
+        pygame = pygame_or_hint()
         self.pg, self.env = pygame, env
-        pygame.init()
+        pygame.display.init()
         frame = env._frame()
-        self.screen = pygame.display.set_mode(frame.shape[1::-1])
+        self.fw, self.fh = frame.shape[1], frame.shape[0]
+        self.screen = pygame.display.set_mode((self.fw + _PANEL, max(self.fh, 420)))
         pygame.display.set_caption("kinegym play - draw your mark, Enter when done")
         from kinegym.envs.sim.arm import view_box
 
         self.box = view_box(env.sim)
+        x = self.fw + 10
+        self.panel = Panel()
+        self.symbol = self.panel.add(Choice((x, 8, 230, 44), "your symbol", options=("X", "O"), keys=("x", "o"),
+                                            index=0 if symbol == "X" else 1))
+        self.play_btn = self.panel.add(Button((x, 60, 110, 30), "play", key="p", on_press=self._press_play))
+        self.stop_btn = self.panel.add(Button((x + 120, 60, 110, 30), "stop", key="s", on_press=self._press_stop))
+        self.board_label = self.panel.add(Label((x, 100, 230, 150), "board as read", size=0.5))
+        self.status_label = self.panel.add(Label((x, 250, 230, 170), "status", size=0.36))
+        self.play_pressed = self.stop_pressed = False
+        env.on_frame, env.frame_every_s = self._arm_frame, 0.1  # the arm's moves, shown as it draws
+
+    def _press_play(self) -> None:
+        self.play_pressed = True
+
+    def _press_stop(self) -> None:
+        self.stop_pressed = True
+
+    def _events(self, block: bool) -> list[Any]:
+        """Pygame events turned into widget events; the panel takes its own, the rest return."""
+        from kinegym.gui.window import _to_event
+
+        pg = self.pg
+        raw = [pg.event.wait()] if block else []
+        raw += pg.event.get()
+        out = []
+        for r in raw:
+            ev = _to_event(pg, r)
+            if ev is None:
+                continue
+            if ev.kind == "quit" or (ev.kind == "key" and ev.key == "escape"):
+                raise Quit()
+            if not self.panel.handle(ev):
+                out.append((ev, r))
+        return out
+
+    def _arm_frame(self, frame: np.ndarray) -> None:
+        self.show(frame)
+        self._events(block=False)
+        if self.stop_pressed:
+            raise StopGame()
 
     def show(self, frame: np.ndarray | None = None, hint: str = "") -> None:
         import cv2
 
-        pg = self.pg
-        frame = self.env._frame() if frame is None else frame
+        env = self.env
+        frame = env._frame() if frame is None else frame
         if hint:
             frame = frame.copy()
             cv2.putText(frame, hint, (8, frame.shape[0] - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (180, 20, 20), 1,
                         cv2.LINE_AA)
-        surf = pg.surfarray.make_surface(np.ascontiguousarray(frame.transpose(1, 0, 2)))
-        self.screen.blit(surf, (0, 0))
-        pg.display.flip()
+        img = np.full((self.screen.get_height(), self.screen.get_width(), 3), 250, np.uint8)
+        img[: frame.shape[0], : frame.shape[1]] = frame
+        self.board_label.lines = ["  ".join("." if v == 0 else "XO"[int(v) - 1] for v in row) for row in env.belief]
+        self.status_label.lines = [m[:34] for m in env._status[-8:]]
+        self.panel.draw(img)
+        self.last = img
+        self.pg.display.get_surface().blit(self.pg.image.frombuffer(img.tobytes(), img.shape[1::-1], "RGB"), (0, 0))
+        self.pg.display.flip()
+
+    def wait_for_play(self) -> str:
+        """The lobby: until Play is pressed (returns the chosen symbol); Esc quits."""
+        self.play_pressed = self.stop_pressed = False
+        while not self.play_pressed:
+            self.show(hint="choose your symbol, then Play [p]")
+            self._events(block=True)
+        self.play_pressed = self.stop_pressed = False
+        return self.symbol.value
 
     def to_canvas(self, u: float, v: float) -> np.ndarray:
         x0, _, _, y1 = self.box
@@ -118,42 +184,42 @@ class WindowPerson:
     def __call__(self, board: Any) -> int:
         from kinegym.envs.sim.board import PENS
 
-        pg, env = self.pg, self.env
+        env = self.env
         lay, n = env.layout, env.n
         strokes: list[list[np.ndarray]] = []
         base = env.sim.canvas.copy()
         hint = "draw your mark (mouse), Backspace: undo, Enter: done"
         while True:
             self.show(hint=hint)
-            ev = pg.event.wait()
-            if ev.type == pg.QUIT or (ev.type == pg.KEYDOWN and ev.key == pg.K_ESCAPE):
-                raise Quit()
-            if ev.type == pg.MOUSEBUTTONDOWN and ev.button == 1:
-                strokes.append([self.to_canvas(*ev.pos)])
-            elif ev.type == pg.MOUSEMOTION and ev.buttons[0] and strokes:
-                strokes[-1].append(self.to_canvas(*ev.pos))
-                env.sim.canvas.stroke(np.array(strokes[-1][-2:]), PENS["black"])
-            elif ev.type == pg.KEYDOWN and ev.key == pg.K_BACKSPACE and strokes:
-                strokes.pop()
-                env.sim.canvas = base.copy()
-                for s in strokes:
-                    env.sim.canvas.stroke(np.array(s), PENS["black"])
-            elif ev.type == pg.KEYDOWN and ev.key in (pg.K_RETURN, pg.K_KP_ENTER) and strokes:
-                pts = np.concatenate([np.array(s) for s in strokes])
-                c = (pts.min(0) + pts.max(0)) / 2 - np.asarray(lay.field_origin)
-                col, row = int(c[0] // lay.cell), int(n - 1 - c[1] // lay.cell)
-                if not (0 <= row < n and 0 <= col < n):
-                    hint = "that is off the field - Backspace and draw inside a cell"
-                    continue
-                cell = row * n + col
-                if not board.is_legal(cell):
-                    hint = f"cell ({row}, {col}) is taken - Backspace and draw in a free cell"
-                    continue
-                return cell
+            for ev, _ in self._events(block=True):
+                if self.stop_pressed:
+                    raise StopGame()
+                on_board = ev.pos[0] < self.fw
+                if ev.kind == "down" and on_board:
+                    strokes.append([self.to_canvas(*ev.pos)])
+                elif ev.kind == "move" and ev.buttons and strokes and on_board:
+                    strokes[-1].append(self.to_canvas(*ev.pos))
+                    env.sim.canvas.stroke(np.array(strokes[-1][-2:]), PENS["black"])
+                elif ev.kind == "key" and ev.key == "backspace" and strokes:
+                    strokes.pop()
+                    env.sim.canvas = base.copy()
+                    for st in strokes:
+                        env.sim.canvas.stroke(np.array(st), PENS["black"])
+                elif ev.kind == "key" and ev.key in ("return", "enter") and strokes:
+                    pts = np.concatenate([np.array(st) for st in strokes])
+                    c = (pts.min(0) + pts.max(0)) / 2 - np.asarray(lay.field_origin)
+                    col, row = int(c[0] // lay.cell), int(n - 1 - c[1] // lay.cell)
+                    if not (0 <= row < n and 0 <= col < n):
+                        hint = "that is off the field - Backspace and draw inside a cell"
+                    elif not board.is_legal(row * n + col):
+                        hint = f"cell ({row}, {col}) is taken - Backspace and draw in a free cell"
+                    else:
+                        return row * n + col
+            if self.stop_pressed:
+                raise StopGame()
 
     def close(self) -> None:
         self.pg.display.quit()
-        self.pg.quit()
 
 
 def cmd_play(args: argparse.Namespace) -> int:
@@ -170,49 +236,48 @@ def cmd_play(args: argparse.Namespace) -> int:
     person_sym = args.symbol.upper()
     if person_sym not in ("X", "O"):
         raise UsageError(f"--symbol {args.symbol!r}; expected X or O")
-    arm_sym = "O" if person_sym == "X" else "X"
     out = sys.stdout
     gui = not args.terminal and display_available()
     if not gui and not args.terminal:
         out.write("kinegym play: no display found - playing in the terminal (type your cells)\n")
-    env = TicTacToeDrawEnv(board=args.board, k=k, agent_symbol=arm_sym, opponent=lambda b: 0,
-                           opponents={"strong": strong_opponent, "thesis": thesis_opponent},
-                           draw_physics=not args.fast, erase=not args.no_erase)
     player = make_player(args.opponent, seed=args.seed)
-    shown = [0]
 
-    def show_status(info: dict[str, Any] | None = None, board: Any = None) -> None:
-        """The env's new status messages, then the board: as it stands when it is the person's
-        turn (``board``, the arm's latest mark included), else as the camera last read it."""
-        msgs = env._status[shown[0]:]
-        for m in msgs:
-            out.write(f"  [{m}]\n")
-        shown[0] = len(env._status)
-        if board is not None:
-            cells, title = np.asarray(board.cells()), "the board, your move"
-        else:
-            cells, title = env.belief, "board as read"
-        if info is not None or msgs or board is not None:
-            rows = ["|".join(" " + ("." if v == 0 else "XO"[int(v) - 1]) + " " for v in row) for row in cells]
-            out.write(f"  {title}:\n" + "\n".join("    " + r for r in rows) + "\n")
-        out.flush()
+    def new_env(person_symbol: str) -> Any:
+        return TicTacToeDrawEnv(board=args.board, k=k, agent_symbol="O" if person_symbol == "X" else "X",
+                                opponent=lambda b: 0, opponents={"strong": strong_opponent, "thesis": thesis_opponent},
+                                draw_physics=not args.fast, erase=not args.no_erase)
 
-    person: Any
-    if gui:
-        person = WindowPerson(env)
-    else:
-        person = TerminalPerson(sys.stdin, out, args.board, show_status)
-    env.opponent_spec = person
-    result = {"winner": None, "moves": 0}
-    try:
+    def play_one(env: Any, person: Any, person_sym: str) -> dict[str, Any]:
+        """One game; the person is the env's opponent. Returns the result."""
+        arm_sym = "O" if person_sym == "X" else "X"
+        shown = [0]
+
+        def show_status(info: dict[str, Any] | None = None, board: Any = None) -> None:
+            """The env's new status messages, then the board: as it stands when it is the person's
+            turn (``board``, the arm's latest mark included), else as the camera last read it."""
+            msgs = env._status[shown[0]:]
+            for m in msgs:
+                out.write(f"  [{m}]\n")
+            shown[0] = len(env._status)
+            if board is not None:
+                cells, title = np.asarray(board.cells()), "the board, your move"
+            else:
+                cells, title = env.belief, "board as read"
+            if info is not None or msgs or board is not None:
+                rows = ["|".join(" " + ("." if v == 0 else "XO"[int(v) - 1]) + " " for v in row) for row in cells]
+                out.write(f"  {title}:\n" + "\n".join("    " + r for r in rows) + "\n")
+            out.flush()
+
+        if isinstance(person, TerminalPerson):
+            person.show = show_status
+        env.opponent_spec = person
+        result: dict[str, Any] = {"symbol": person_sym, "winner": None, "moves": 0}
         env.reset(seed=args.seed)
         show_status()
-        done = False
-        info: dict[str, Any] = {}
+        done, info = False, {}
         while not done:
             shown[0] = 0
-            board = Board.from_cells(env.game, env.belief)
-            a = player.choose(board)
+            a = player.choose(Board.from_cells(env.game, env.belief))
             obs, r, term, trunc, info = env.step(a)
             result["moves"] += 1
             show_status(info)
@@ -223,14 +288,36 @@ def cmd_play(args: argparse.Namespace) -> int:
         who = {arm_sym: "the arm", person_sym: "you"}.get(str(info.get("winner")), "nobody (a draw)")
         out.write(f"game over: {info.get('winner')} - {who} won\n" if info.get("winner") != "draw"
                   else "game over: a draw\n")
-    except Quit:
-        out.write("you left the game\n")
-        result["winner"] = "quit"
-    finally:
-        if gui:
+        return result
+
+    results: list[dict[str, Any]] = []
+    if not gui:
+        env = new_env(person_sym)
+        try:
+            results.append(play_one(env, TerminalPerson(sys.stdin, out, args.board, lambda **_: None), person_sym))
+        except Quit:
+            out.write("you left the game\n")
+            results.append({"symbol": person_sym, "winner": "quit", "moves": 0})
+    else:
+        env = new_env(person_sym)
+        person = WindowPerson(env, person_sym)
+        try:
+            while True:  # the lobby: choose a symbol, Play; Stop ends a game, Esc the program
+                sym = person.wait_for_play()
+                env = new_env(sym)
+                person.env, env.on_frame, env.frame_every_s = env, person._arm_frame, 0.1
+                try:
+                    results.append(play_one(env, person, sym))
+                except StopGame:
+                    out.write("game stopped\n")
+                    results.append({"symbol": sym, "winner": "stopped", "moves": 0})
+        except Quit:
+            out.write("you left the game\n")
+        finally:
             person.close()
     if args.json:
-        emit(args, result, "")
+        last = results[-1] if results else {"winner": "quit", "moves": 0}
+        emit(args, {**last, "games": results}, "")
     return EXIT_OK
 
 
