@@ -185,3 +185,11 @@ def test_play_window_controls_symbol_play_draw_and_stop(monkeypatch: pytest.Monk
     assert state["arm_frames"] > 0  # the arm's move was shown as it drew
     assert person.env.true_board.cells()[state["cell"] // 3][state["cell"] % 3] == 2  # the person's O
     assert person.last.shape[1] == person.fw + P._PANEL and person.last.std() > 20
+
+
+def test_a_missing_toolkit_is_the_install_hint(monkeypatch: pytest.MonkeyPatch) -> None:
+    from kinegym.gui.window import GuiUnavailable, pygame_or_hint
+
+    monkeypatch.setitem(sys.modules, "pygame", None)  # import pygame -> ImportError
+    with pytest.raises(GuiUnavailable, match=r"pip install \"kinegym\[human\]\""):
+        pygame_or_hint()
