@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import io
 import json
-import pickle
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -103,8 +102,7 @@ def load_maskable(path: str | Path, observation_space: Any, action_space: Any, e
                                 custom_objects={k: custom[k] for k in pickled}, **kwargs)
     except FileError:
         raise
-    except (RuntimeError, ValueError, KeyError, AssertionError, TypeError, EOFError, AttributeError,
-            zipfile.BadZipFile, pickle.UnpicklingError) as err:
+    except Exception as err:  # noqa: BLE001 - nothing is unpickled; any failure means a damaged or foreign file
         msg = " ".join(str(err).split())[:160]
         raise FileError(path, f"a model that does not fit this env or is damaged ({type(err).__name__}: {msg})",
                         "a model trained on an env with the same observation and action spaces") from None

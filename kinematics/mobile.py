@@ -62,10 +62,10 @@ class MotionModel:
     def __post_init__(self) -> None:
         if self.kind not in ("holonomic", "tricycle"):
             raise InvalidInputError(f"kind={self.kind!r}; expected 'holonomic' or 'tricycle'")
-        for name in ("length", "v_max", "w_max"):
+        for name, lo, hi in (("length", 1e-3, 1e3), ("v_max", 1e-6, 1e3), ("w_max", 1e-6, math.pi / 2 - 1e-6)):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InvalidInputError(f"{name}={v!r}; expected a finite value > 0")
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi):
+                raise InvalidInputError(f"{name}={v!r}; expected a value in {lo:g}..{hi:g}")
         for name in ("forward_noise", "turn_noise"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):

@@ -285,3 +285,30 @@ def test_degenerate_walls_end_cleanly(tmp_path: Path) -> None:
     assert code == 3 and "no route" in text
     code, text = _run(["sensor-study", "--trials", "10", "--walks", "1", "--wall", str(same), "--out", str(tmp_path)])
     assert code == 2 and "0.1 cm apart" in text
+
+
+@pytest.mark.parametrize("argv", [
+    ["follow", "--model", "tricycle", "--length", "1e-320", "--max-steps", "5"],
+    ["draw", "--shape", "sine", "--size", "1e308"], ["draw", "--shape", "field", "--size", "inf"],
+    ["draw", "--shape", "lines", "--size", "1e12"], ["localize", "--angles", "-24,85;78,55;-155,103", "--tolerance",
+                                                     "1e308"],
+    ["localize", "--angles", "-24,85;78,55;-155,103", "--wall", "grid:99999999999999999999x2"],
+    ["sensor-study", "--sigmas", "1e-320"], ["servo", "tune", "--out", "gains.txt"]])
+def test_what_the_fuzz_campaign_found_stays_fixed(argv: list[str], tmp_path: Path) -> None:
+    """8 command lines a 1,700-case subprocess campaign once broke (tracebacks): exit 2 now."""
+    code, text = _run([*argv, *(["--out", str(tmp_path)] if argv[0] == "draw" else [])], limit_s=20)
+    assert code == 2 and "Traceback" not in text, (argv, text)
+
+
+def test_an_image_claiming_gigapixels_is_refused(tmp_path: Path) -> None:
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 100_000, 100_000, 8, 2, 0, 0, 0)) + \
+        chunk(b"IEND", b"")
+    (tmp_path / "bomb.png").write_bytes(png)
+    code, text = _run(["read-board", str(tmp_path / "bomb.png")])
+    assert code == 2 and "pixels" in text

@@ -29,18 +29,27 @@ def read_image(path: str | Path, max_bytes: int = MAX_IMAGE_BYTES, max_pixels: i
     data = read_bytes(path, max_bytes, "image file")
     buf = np.frombuffer(data, np.uint8)
     # the header's size first, so a tiny file claiming gigapixels is refused before decoding
+    import io
+    import warnings
+
+    from PIL import Image
+
     try:
-        import io
-
-        from PIL import Image
-
-        with Image.open(io.BytesIO(data)) as im:
-            w, h = im.size
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(io.BytesIO(data)) as im:
+                w, h = im.size
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning):
+        raise FileError(path, "an image whose header claims more pixels than a camera has",
+                        f"an image of at most {max_pixels:,} pixels") from None
     except Exception:  # noqa: BLE001 - Pillow does not know every format OpenCV reads; decode decides
         w = h = 0
     if w * h > max_pixels:
         raise FileError(path, f"a {w} x {h} image", f"an image of at most {max_pixels:,} pixels")
-    bgr = cv2.imdecode(buf, cv2.IMREAD_COLOR) if len(buf) else None
+    try:
+        bgr = cv2.imdecode(buf, cv2.IMREAD_COLOR) if len(buf) else None
+    except cv2.error:
+        bgr = None
     if bgr is None or bgr.size == 0:
         raise FileError(path, "not an image OpenCV can decode", "a PNG, JPEG, BMP or TIFF image")
     return np.ascontiguousarray(bgr[..., ::-1])

@@ -37,8 +37,8 @@ def shape_strokes(sim: Any, shape: str, size_cm: float | None, cell: tuple[int, 
     from kinegym.envs.sim import strokes as S
 
     lay = sim.layout
-    if size_cm is not None and not size_cm > 0:
-        raise UsageError(f"--size {size_cm}; expected a size > 0 cm")
+    if size_cm is not None and not (math.isfinite(size_cm) and 0 < size_cm <= 30):
+        raise UsageError(f"--size {size_cm}; expected a size in 0..30 cm (the board)")
     if shape == "x":
         ratio = None if size_cm is None else size_cm / lay.cell
         if ratio is not None and not 0 < ratio <= 1:

@@ -139,8 +139,8 @@ def add_parsers(sub: Any) -> None:
     so.add_argument("board", help='rows joined by |, e.g. "X..|.O.|..." (3x3) or 5 rows of 5 for 5x5')
     so.add_argument("--k", type=int, default=None, help="stones in a row to win (default 3 on 3x3, else 4)")
     so.add_argument("--no-book", action="store_true", help="search from scratch, without the opening book")
-    so.add_argument("--time-limit", type=float, default=60.0,
-                    help="seconds for an exact answer, else 'unknown' with exit 3 (default 60)")
+    so.add_argument("--time-limit", type=float, default=20.0,
+                    help="seconds for an exact answer, else 'unknown' with exit 3 (default 20)")
     add_json(so)
     so.set_defaults(func=cmd_solve)
 
