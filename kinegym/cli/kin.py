@@ -144,13 +144,14 @@ def _noise(args: argparse.Namespace, geom: Any) -> Any:
 
     if args.tolerance is not None:
         if not (math.isfinite(args.tolerance) and 0.001 <= args.tolerance <= 20):
-            raise UsageError(f"--tolerance {args.tolerance!r} is not a length in 0.001..20 cm")
+            raise UsageError(f"--tolerance {args.tolerance!r}; expected a length in 0.001..20 cm")
         return NoiseModel(tolerance=args.tolerance)
     sigma = math.degrees(geom.sensor_sigma) if args.sigma is None else args.sigma
     if not (math.isfinite(sigma) and 0.001 <= sigma <= 10):
-        raise UsageError(f"--sigma {sigma!r} is not an angle in 0.001..10 deg (beyond it no grip tells holes apart)")
+        raise UsageError(f"--sigma {sigma!r}; expected an angle in 0.001..10 deg (beyond it no grip tells holes "
+                         "apart)")
     if not (math.isfinite(args.map_sigma) and 0 <= args.map_sigma <= 5):
-        raise UsageError(f"--map-sigma {args.map_sigma!r} is not a length in 0..5 cm")
+        raise UsageError(f"--map-sigma {args.map_sigma!r}; expected a length in 0..5 cm")
     return NoiseModel(sigma_angle=math.radians(sigma), sigma_map=args.map_sigma)
 
 
