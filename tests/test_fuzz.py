@@ -124,10 +124,10 @@ yaml_values = st.recursive(
 
 
 @pytest.mark.parametrize("kind", ["robots", "arms", "walls", "beacons", "train", "arm_errors", "measurements"])
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_every_schema_answers_fuzzed_yaml_with_a_config_error(kind: str, data: st.DataObject, tmp_path: Path) -> None:
-    """60 documents per schema (7 schemas: 420), each a built-in file with random keys mutated:
+    """40 documents per schema (7 schemas: 280), each a built-in file with random keys mutated:
     loads, or a ConfigError that names the file; nothing else escapes."""
     from kinegym.configs import CONFIG_DIR, available
 
@@ -164,10 +164,10 @@ def test_every_schema_answers_fuzzed_yaml_with_a_config_error(kind: str, data: s
         assert type(err).__name__ != "ValueError" or "expected" in str(err), repr(err)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(command=st.sampled_from(CHEAP), data=st.data())
 def test_the_cli_grammar_fuzzed_ends_cleanly(command: str, data: st.DataObject) -> None:
-    """300 command lines: a cheap command, 1-3 of its options with hostile values: exit 0, 2 or
+    """200 command lines: a cheap command, 1-3 of its options with hostile values: exit 0, 2 or
     3 (a one-line message on 2), no exception escapes, each within 30 s."""
     opts = _options(command)
     argv = command.split() + (["X..|.O.|..."] if command == "solve" else [])
