@@ -162,10 +162,10 @@ TRAIN_SCHEMA: dict[str, _configs.Spec] = {
     "vf_coef": _N(lo=0.0, default=0.5),
     "max_grad_norm": _N(lo=0.0, lo_open=True, default=0.5),
     "normalize": _configs.Flag(default=False, doc="VecNormalize the observations"),
-    "eval_freq": _N(lo=1, integer=True, default=20_000, doc="env steps (all envs) between evaluations"),
+    "eval_freq": _N(lo=64, integer=True, default=20_000, doc="env steps (all envs) between evaluations"),
     "eval_episodes": _N(lo=1, integer=True, default=40),
     "checkpoint_freq": _N(lo=1, integer=True, default=50_000, doc="env steps (all envs) between checkpoints"),
-    "torch_threads": _N(lo=1, integer=True, default=1),
+    "torch_threads": _N(lo=1, hi=64, integer=True, default=1),
 }
 
 
@@ -243,7 +243,11 @@ def _new_run_dir(base: Path, stem: str) -> Path:
     for k in range(10_000):
         d = base / (stem if k == 0 else f"{stem}-{k}")
         if not d.exists():
-            d.mkdir(parents=True)
+            try:
+                d.mkdir(parents=True)
+            except OSError as err:
+                raise _configs.FileError(base, f"a run folder cannot be made there ({err.strerror or err})",
+                                         "a writable folder for run directories (--out)") from None
             return d
     raise RuntimeError(f"no free run directory under {base}")
 
@@ -385,7 +389,8 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
     ck, steps = _last_checkpoint(src)
     total = cfg["n_timesteps"] if timesteps is None else int(timesteps)
     if total <= steps:
-        raise ValueError(f"--timesteps {total}: the checkpoint {ck.name} is already at {steps} steps")
+        raise _configs.ConfigError(str(ck), "--timesteps", total,
+                                   f"more than the {steps} steps the checkpoint is already at")
     cfg["n_timesteps"] = total
     _set_threads(cfg["torch_threads"])
     k = 1

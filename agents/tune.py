@@ -43,6 +43,9 @@ def open_storage(url: str) -> Any:
         return JournalStorage(JournalFileBackend(str(path)))
     if "://" not in url:
         raise _configs.FileError(url, "not a storage URL", _STORAGE_HELP)
+    if url in ("sqlite://", "sqlite:///", "sqlite:///:memory:"):
+        raise _configs.FileError(url, "an in-memory database (workers cannot share it, nothing is kept)",
+                                 "sqlite:///study.db or another storage URL")
     if url.startswith("sqlite:///"):
         _check_storage_file(url, Path(url[len("sqlite:///"):]), b"SQLite format 3\x00", "an SQLite database")
     try:

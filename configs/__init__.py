@@ -253,13 +253,17 @@ def resolve(kind: str, name_or_path: str | Path) -> Path:
         ConfigError: neither a file nor a built-in name (lists the built-in names).
     """
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") or path.exists():
-        if path.is_file():
-            return path
-        raise ConfigError(str(path), "", str(name_or_path), "an existing YAML file")
-    builtin = CONFIG_DIR / kind / f"{name_or_path}.yaml"
-    if builtin.is_file():
-        return builtin
+    try:
+        if path.suffix in (".yaml", ".yml") or path.exists():
+            if path.is_file():
+                return path
+            raise ConfigError(str(path), "", str(name_or_path), "an existing YAML file")
+        builtin = CONFIG_DIR / kind / f"{name_or_path}.yaml"
+        if builtin.is_file():
+            return builtin
+    except OSError as err:  # a name too long for the file system, ...
+        raise ConfigError(str(path)[:80], "", str(name_or_path)[:80],
+                          f"a usable file name ({err.strerror})") from None
     names = ", ".join(available(kind)) or "none"
     raise ConfigError(
         f"configs/{kind}", "", str(name_or_path), f"a YAML file path or one of: {names}"

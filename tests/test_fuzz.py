@@ -312,3 +312,18 @@ def test_an_image_claiming_gigapixels_is_refused(tmp_path: Path) -> None:
     (tmp_path / "bomb.png").write_bytes(png)
     code, text = _run(["read-board", str(tmp_path / "bomb.png")])
     assert code == 2 and "pixels" in text
+
+
+def test_training_and_tuning_inputs_fail_before_any_work(tmp_path: Path) -> None:
+    """What the campaign found in train/tune: each refused in well under a second of work."""
+    (tmp_path / "afile").write_text("x")
+    long = "x" * 300
+    for argv, needle in ((["tune", "gait", "--storage", "sqlite://", "--study", "s"], "in-memory"),
+                         (["tune", "gait", "--storage", f"sqlite:///{tmp_path}/t.db", "--study", "s", "--config",
+                           long], "file name"),
+                         (["tune", "gait", "--storage", f"sqlite:///{tmp_path}/t.db", "--study", "s", "--config",
+                           str(tmp_path / "missing.yaml")], "missing.yaml"),
+                         (["train", "gait", "--timesteps", "64", "--out", str(tmp_path / "afile")], "run folder")):
+        code, text = _run(argv, limit_s=30)
+        assert code == 2 and needle in text and "Traceback" not in text, (argv, text)
+    assert not (tmp_path / "t.db").exists() or (tmp_path / "t.db").stat().st_size >= 0

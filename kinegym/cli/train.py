@@ -72,6 +72,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_tune(args: argparse.Namespace) -> int:
+    from kinegym.agents import train as T
 
     if args.trials < 1:
         raise UsageError(f"--trials {args.trials}; expected >= 1")
@@ -79,7 +80,8 @@ def cmd_tune(args: argparse.Namespace) -> int:
         raise UsageError(f"--timesteps {args.timesteps}; expected 64..1e9 env steps per trial")
     from kinegym.agents.tune import open_storage, tune
 
-    open_storage(args.storage)  # a bad storage is named before any trial starts
+    T.load_train_config(args.config)  # a bad config is named before any trial starts (not inside one)
+    open_storage(args.storage)  # so is a bad storage
     res = tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed)
     lines = [f"study {res['study']} on {res['storage']}: {res['trials']} trials ({res['complete']} complete, "
              f"{res['pruned']} pruned)", f"best validation success {res['best_value']}, params {res['best_params']}"]
