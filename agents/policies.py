@@ -27,8 +27,8 @@ import numpy as np
 import kinegym.configs as _configs
 from kinegym.configs.io import FileError, read_bytes
 
-__all__ = ["MaskedPolicyAgent", "load_maskable", "policy_env_kwargs", "GAIT_ENV_ID", "POOL_KEYS", "MAX_MODEL_BYTES",
-           "SAFE_KEYS"]
+__all__ = ["MaskedPolicyAgent", "load_maskable", "read_archive", "policy_env_kwargs", "GAIT_ENV_ID", "POOL_KEYS",
+           "MAX_MODEL_BYTES", "SAFE_KEYS"]
 
 GAIT_ENV_ID = "kinegym/HoleClimb-v0"
 #: env_kwargs of a training wall pool (dropped when a policy is judged: fresh walls)
@@ -65,13 +65,9 @@ def _zero(_: float) -> float:
     return 0.0
 
 
-def load_maskable(path: str | Path, observation_space: Any, action_space: Any, env: Any = None,
-                  learning_rate: Any = 0.0, clip_range: Any = 0.0, cls: Any = None, **kwargs: Any) -> Any:
-    """A MaskablePPO model from ``path`` with the given spaces (and ``env`` to train on, with
-    its ``learning_rate`` / ``clip_range`` as the config gives them); see the module docstring."""
-    from sb3_contrib import MaskablePPO
-    from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
-
+def read_archive(path: str | Path) -> tuple[bytes, dict[str, Any]]:
+    """The bytes of an SB3 model archive and its JSON ``data`` record (nothing unpickled);
+    :class:`FileError` for anything that is not one."""
     data = read_bytes(path, MAX_MODEL_BYTES, "model file (.zip)")
     expected = "a MaskablePPO model saved by kinegym train or SB3's model.save (.zip)"
     try:
@@ -86,6 +82,17 @@ def load_maskable(path: str | Path, observation_space: Any, action_space: Any, e
         raise FileError(path, "an SB3 archive whose data record is not JSON", expected) from None
     if not isinstance(meta, dict):
         raise FileError(path, "an SB3 archive whose data record is not a mapping", expected)
+    return data, meta
+
+
+def load_maskable(path: str | Path, observation_space: Any, action_space: Any, env: Any = None,
+                  learning_rate: Any = 0.0, clip_range: Any = 0.0, cls: Any = None, **kwargs: Any) -> Any:
+    """A MaskablePPO model from ``path`` with the given spaces (and ``env`` to train on, with
+    its ``learning_rate`` / ``clip_range`` as the config gives them); see the module docstring."""
+    from sb3_contrib import MaskablePPO
+    from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
+
+    data, meta = read_archive(path)
     pickled = sorted(k for k, v in meta.items() if isinstance(v, dict) and ":serialized:" in v)
     unknown = [k for k in pickled if k not in SAFE_KEYS]
     if unknown:

@@ -341,19 +341,14 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
 
 def _saved_steps(model_zip: Path) -> int:
     """``num_timesteps`` of a saved model, read from its JSON record (nothing unpickled)."""
-    import json
-    import zipfile
+    from kinegym.agents.policies import read_archive
 
-    from kinegym.agents.policies import MAX_MODEL_BYTES
-
-    raw = _configs.read_bytes(model_zip, MAX_MODEL_BYTES, "model file (.zip)")
+    _, meta = read_archive(model_zip)
     try:
-        import io
-
-        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
-            return int(json.loads(zf.read("data"))["num_timesteps"])
-    except (zipfile.BadZipFile, KeyError, ValueError, TypeError):
-        raise _configs.FileError(model_zip, "not an SB3 model archive", "a model saved by kinegym train") from None
+        return int(meta["num_timesteps"])
+    except (KeyError, ValueError, TypeError):
+        raise _configs.FileError(model_zip, "an SB3 archive without a step counter",
+                                 "a model saved by kinegym train") from None
 
 
 def _last_checkpoint(run: Path) -> tuple[Path, int]:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from typing import Any
 
 from kinegym.cli.common import EXIT_OK, Parser, UsageError, add_json, emit
@@ -36,17 +35,18 @@ def cmd_gui(args: argparse.Namespace) -> int:
         raise UsageError(f"--frames {args.frames}; expected 1..1000000")
     if not 1 <= args.fps <= 240:
         raise UsageError(f"--fps {args.fps}; expected 1..240")
+    from kinegym.cli.play import display_available
+
+    try:  # the toolkit first: without it the hint is what to install, not "no display"
+        pygame_or_hint()
+    except GuiUnavailable as err:
+        raise UsageError(str(err)) from None
     headless = os.environ.get("SDL_VIDEODRIVER", "") in ("dummy", "offscreen")
-    if sys.platform.startswith("linux") and not headless and not (os.environ.get("DISPLAY")
-                                                                  or os.environ.get("WAYLAND_DISPLAY")):
+    if not headless and not display_available():
         raise UsageError("no display: run it on a desktop, under xvfb-run, or with SDL_VIDEODRIVER=dummy and "
                          "--frames N --screenshot F to record")
     if headless and args.frames is None:
         raise UsageError("SDL_VIDEODRIVER=dummy shows nothing: give --frames N (and --screenshot F)")
-    try:
-        pygame_or_hint()
-    except GuiUnavailable as err:
-        raise UsageError(str(err)) from None
     script = _script(args.keys)
     app = args.make_app(args)
     stats = run(app, fps=args.fps, title=args.title, script=script, max_frames=args.frames,
