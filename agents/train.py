@@ -81,10 +81,15 @@ EnvFactory = Callable[..., Any]
 
 
 def make_env(**env_kwargs: Any) -> Any:
-    """``gymnasium.make(ENV_ID, **env_kwargs)``: the registered HoleClimb-v0 with its time limit."""
+    """The registered HoleClimb id that ``memory`` / ``hints`` name (``kinegym/HoleClimb-v0``,
+    ``...Memory-v0``, ``...MemoryHints-v0``), made with the other ``env_kwargs``, time limit included."""
     import gymnasium as gym
 
-    return gym.make(ENV_ID, **env_kwargs)
+    import kinegym  # noqa: F401  (registers the ids)
+    from kinegym.envs.variants import split_space_kwargs
+
+    env_id, rest = split_space_kwargs(ENV_ID, env_kwargs)
+    return gym.make(env_id, **rest)
 
 
 @dataclass(frozen=True)
@@ -137,6 +142,52 @@ class _Section(_configs.Spec):
         return {k: v for k, v in out.items() if k in value}
 
 
+@dataclass(frozen=True)
+class _PolicyKwargs(_Section):
+    """SB3's ``policy_kwargs`` as a mapping, or as RL Zoo writes them, a string like
+    ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` - read as data (:func:`parse_zoo_dict`),
+    never evaluated."""
+
+    def check(self, value: Any, source: str, key: str) -> Any:
+        if isinstance(value, str):
+            try:
+                value = parse_zoo_dict(value)
+            except ValueError as exc:
+                raise _configs.ConfigError(source, key, value, f"a mapping or RL Zoo's 'dict(key=value, ...)' ({exc})") \
+                    from None
+        return super().check(value, source, key)
+
+
+def parse_zoo_dict(text: str) -> dict[str, Any]:
+    """RL Zoo's ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU, ortho_init=False)"`` as a
+    dict of plain values (``nn.ReLU`` -> ``"relu"``), read with :mod:`ast`, nothing evaluated;
+    ``ValueError`` for anything else."""
+    import ast
+
+    if len(text) > 2000:
+        raise ValueError("longer than 2,000 characters")
+    try:
+        node = ast.parse(text.strip(), mode="eval").body
+    except SyntaxError:
+        raise ValueError("not a Python expression") from None
+    if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict"
+            and not node.args):
+        raise ValueError("expected dict(key=value, ...)")
+    names = {v.lower(): k for k, v in ACTIVATIONS.items()}
+    out: dict[str, Any] = {}
+    for kw in node.keywords:
+        v = kw.value
+        if isinstance(v, ast.Attribute) and v.attr.lower() in names:  # nn.ReLU, th.nn.Tanh
+            out[str(kw.arg)] = names[v.attr.lower()]
+            continue
+        try:
+            out[str(kw.arg)] = ast.literal_eval(v)
+        except ValueError:
+            raise ValueError(f"{kw.arg}={ast.unparse(v)} is not a literal or one of nn.{', nn.'.join(ACTIVATIONS.values())}")\
+                from None
+    return out
+
+
 def _env_kwargs_schema() -> dict[str, _configs.Spec]:
     from kinegym.envs.hole_climb import ENV_KWARGS_SCHEMA
 
@@ -145,11 +196,11 @@ def _env_kwargs_schema() -> dict[str, _configs.Spec]:
 
 _N = _configs.Number
 TRAIN_SCHEMA: dict[str, _configs.Spec] = {
-    "algo": _configs.Text(choices=("maskable_ppo",), default="maskable_ppo"),
+    "algo": _configs.Text(choices=("maskable_ppo", "ppo_mask"), default="maskable_ppo", doc="ppo_mask: RL Zoo's name"),
     "n_envs": _N(lo=1, hi=64, integer=True, default=2),
     "n_timesteps": _N(lo=1, integer=True, default=500_000),
     "policy": _configs.Text(choices=("MlpPolicy",), default="MlpPolicy"),
-    "policy_kwargs": _Section(default={}, fields=POLICY_KWARGS_SCHEMA, doc="SB3 policy_kwargs (net_arch, ...)"),
+    "policy_kwargs": _PolicyKwargs(default={}, fields=POLICY_KWARGS_SCHEMA, doc="SB3 policy_kwargs (net_arch, ...)"),
     "env_kwargs": _Section(default={}, fields=_env_kwargs_schema, doc="gymnasium.make keyword arguments"),
     "learning_rate": _Schedule(default=3e-4),
     "clip_range": _Schedule(default=0.2),
@@ -182,20 +233,55 @@ def parse_schedule(value: Any) -> float | Callable[[float], float]:
     raise ValueError(f"schedule {value!r}: expected a number > 0 or 'lin_<number>'")
 
 
-def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str = ENV_ID) -> dict[str, Any]:
-    """The validated section ``env_id`` of a training YAML (a ``configs/train`` name or a path)."""
+def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str | None = None) -> dict[str, Any]:
+    """The validated section of a training YAML (a ``configs/train`` name or a path) for
+    ``env_id``, or (None) for the one HoleClimb id it has a section for.
+
+    Both spellings are read: kinegym's (``kinegym/HoleClimb-v0`` with ``env_kwargs: {memory:
+    true, hints: true}``) and RL Zoo's (a section per registered id, e.g.
+    ``kinegym/HoleClimbMemoryHints-v0``, Zoo's ``policy_kwargs`` strings, ``algo`` absent or
+    ``ppo_mask``, ``n_timesteps: !!float 1e6``). The result uses kinegym's: ``memory`` and
+    ``hints`` in ``env_kwargs``."""
+    from kinegym.envs.variants import HOLE_CLIMB
+
     src = _configs.resolve("train", path)
     data = _configs.load_yaml(src)
-    if not isinstance(data, dict) or env_id not in data:
-        raise _configs.ConfigError(str(src), env_id, None if not isinstance(data, dict) else sorted(data),
-                                   f"a section for {env_id}")
-    return _validate_train(data[env_id], str(src), env_id)
+    ids = [env_id] if env_id is not None else list(HOLE_CLIMB)
+    found = [i for i in ids if isinstance(data, dict) and i in data]
+    if len(found) != 1:
+        keys = sorted(map(str, data)) if isinstance(data, dict) else data
+        want = f"a section for {env_id}" if env_id else "one section for a HoleClimb id: " + ", ".join(HOLE_CLIMB)
+        raise _configs.ConfigError(str(src), found[1] if len(found) > 1 else (env_id or "<top>"), keys, want)
+    return _validate_train(data[found[0]], str(src), found[0])
 
 
 def _validate_train(section: Any, source: str, env_id: str = ENV_ID) -> dict[str, Any]:
     """The whole training section checked before anything is built: SB3's arguments, the
-    policy's and the env's keyword arguments (their keys, types and ranges)."""
-    return _configs.validate(section, TRAIN_SCHEMA, source, prefix=env_id)
+    policy's and the env's keyword arguments (their keys, types and ranges); a Zoo-style
+    section's id becomes ``memory`` / ``hints`` in ``env_kwargs``."""
+    from kinegym.envs.variants import HOLE_CLIMB
+
+    if isinstance(section, dict):
+        section = dict(section)
+        for key in ("n_timesteps", "n_envs", "n_steps", "batch_size", "n_epochs", "eval_freq", "eval_episodes",
+                    "checkpoint_freq"):  # Zoo writes !!float 1e6
+            v = section.get(key)
+            if isinstance(v, float) and math.isfinite(v) and v.is_integer():
+                section[key] = int(v)
+    cfg = _configs.validate(section, TRAIN_SCHEMA, source, prefix=env_id)
+    kw = cfg["env_kwargs"]
+    fixed = HOLE_CLIMB.get(env_id, HOLE_CLIMB[ENV_ID])
+    if env_id != ENV_ID:
+        for key in ("memory", "hints"):
+            if key in kw and bool(kw[key]) != fixed[key]:
+                raise _configs.ConfigError(source, f"{env_id}.env_kwargs.{key}", kw[key],
+                                           f"{fixed[key]} (the id fixes it) or absent")
+        cfg["env_kwargs"] = {**kw, "memory": fixed["memory"], "hints": fixed["hints"]}
+    if "candidates" in kw and kw["candidates"] != 8:
+        raise _configs.ConfigError(source, f"{env_id}.env_kwargs.candidates", kw["candidates"],
+                                   "8 (the registered ids fix it) or absent")
+    cfg["algo"] = "maskable_ppo"
+    return cfg
 
 
 # ------------------------------------------------------------------ environments

@@ -90,8 +90,11 @@ falls (fewer than two grips). Truncated by ``max_episode_steps`` (200 moves when
 ## Arguments
 
 ``gymnasium.make("kinegym/HoleClimb-v0", mode="kinematic", wall="generated", robot="climber",
-candidates=8, wall_kwargs=None, memory=False, hints=False, wall_pool=0, wall_pool_seed=0,
-render_mode=None)``; ``HoleClimbEnv(...)`` made directly takes a
+wall_kwargs=None, wall_pool=0, wall_pool_seed=0, masked="raise", render_mode=None)``. ``memory``,
+``hints`` and ``candidates`` change the observation space, so each variant is its own id
+(:mod:`kinegym.envs.variants`): ``kinegym/HoleClimbMemory-v0`` (``memory=True``) and
+``kinegym/HoleClimbMemoryHints-v0`` (both; what training uses). ``HoleClimbEnv(...)`` made
+directly takes every value of them, and a
 ``route_finder`` (without one walls are not checked: the env package does not import agents).
 ``wall_kwargs`` (generated walls):
 ``cols`` (default (5, 8), an int or an inclusive range), ``rows`` ((8, 14)), ``spacing_cm``
@@ -344,7 +347,13 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         return arm * self.K + self.cand.index(hole) if hole in self.cand else None
 
     def action_masks(self) -> np.ndarray:
-        """Feasible actions (sb3-contrib's MaskablePPO calls this)."""
+        """Feasible actions (sb3-contrib's MaskablePPO calls this). Through ``gymnasium.make``'s
+        wrappers: ``env.get_wrapper_attr("action_masks")()``; on an SB3 vector env:
+        ``sb3_contrib.common.maskable.utils.get_action_masks(vec_env)``. Before the first
+        ``reset()`` there is no wall: :class:`~kinegym.envs.errors.ResetNeededError`."""
+        if self.holes is None:
+            raise ResetNeededError("action_masks() before reset(): the feasible moves depend on the wall and "
+                                   "stance that reset() makes; call reset() first")
         return self.mask.copy()
 
     # ------------------------------------------------------------------ pickling

@@ -281,7 +281,11 @@ class TicTacToeDrawEnv(gym.Env):
 
     # ------------------------------------------------------------------ observation
     def action_masks(self) -> np.ndarray:
-        """Cells free on the board as read (all False once the game is over)."""
+        """Cells free on the board as read (all False once the game is over). Through
+        ``gymnasium.make``'s wrappers: ``env.get_wrapper_attr("action_masks")()``. Before the
+        first ``reset()``: :class:`~kinegym.envs.errors.ResetNeededError`."""
+        if not self._history:
+            raise ResetNeededError("action_masks() before reset(): there is no board yet; call reset() first")
         if self._done:
             return np.zeros(self.n * self.n, bool)
         return self.belief.ravel() == EMPTY

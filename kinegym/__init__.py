@@ -13,13 +13,25 @@ never imports pymunk, pygame, OpenCV or torch.
 
 from gymnasium.envs.registration import register, registry
 
+from kinegym.envs.variants import HOLE_CLIMB, VARIANTS
+
 __version__ = "0.1.0"
-__all__ = ["__version__", "ENV_IDS"]
+__all__ = ["__version__", "ENV_IDS", "ALL_ENV_IDS"]
 
-#: The environment ids this package registers.
+#: The two main environment ids (one per robot).
 ENV_IDS = ("kinegym/HoleClimb-v0", "kinegym/TicTacToeDraw-v0")
+#: Every id this package registers: the main ids and their observation variants
+#: (:mod:`kinegym.envs.variants`: each space is its own id).
+ALL_ENV_IDS = tuple(VARIANTS)
 
-if "kinegym/HoleClimb-v0" not in registry:
-    register(id="kinegym/HoleClimb-v0", entry_point="kinegym.factories:hole_climb", max_episode_steps=200)
-if "kinegym/TicTacToeDraw-v0" not in registry:
-    register(id="kinegym/TicTacToeDraw-v0", entry_point="kinegym.factories:tictactoe_draw")
+
+def _register() -> None:
+    from kinegym.factories import FACTORY_NAMES
+
+    for env_id in VARIANTS:
+        if env_id not in registry:
+            register(id=env_id, entry_point=f"kinegym.factories:{FACTORY_NAMES[env_id]}",
+                     max_episode_steps=200 if env_id in HOLE_CLIMB else None)
+
+
+_register()

@@ -46,9 +46,9 @@ def test_gymnasium_and_sb3_checkers_pass() -> None:
     env = gym.make(ENV_ID, masked="fail")
     check_env(env.unwrapped)
     sb3_check_env(gym.make(ENV_ID, masked="fail"))
-    full = gym.make(ENV_ID, memory=True, hints=True, wall_pool=4, masked="fail")  # what training uses
+    full = gym.make("kinegym/HoleClimbMemoryHints-v0", wall_pool=4, masked="fail")  # what training uses
     check_env(full.unwrapped)
-    sb3_check_env(gym.make(ENV_ID, memory=True, hints=True, wall_pool=4, masked="fail"))
+    sb3_check_env(gym.make("kinegym/HoleClimbMemoryHints-v0", wall_pool=4, masked="fail"))
     assert env.spec.max_episode_steps == 200
     assert env.unwrapped.metadata["render_fps"] > 0
 
@@ -196,7 +196,7 @@ def test_100000_random_valid_actions_raise_nothing() -> None:
 
 def test_memory_features_count_believed_stances() -> None:
     plain = gym.make(ENV_ID)
-    env = gym.make(ENV_ID, memory=True)
+    env = gym.make("kinegym/HoleClimbMemory-v0")
     u = env.unwrapped
     K = u.K
     assert plain.observation_space.shape == (68,) and env.observation_space.shape == (68 + 3 * K + 1,)
@@ -226,7 +226,7 @@ def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
     from kinegym.agents.gait_planner import GaitPlanner
     from kinegym.envs.climb_task import stance_hops
 
-    env = gym.make(ENV_ID, memory=True, hints=True)
+    env = gym.make("kinegym/HoleClimbMemoryHints-v0")
     u = env.unwrapped
     K = u.K
     assert env.observation_space.shape == (68 + 3 * K + 1 + 6 * K + 1,)

@@ -49,15 +49,15 @@ def test_gymnasium_and_sb3_checkers_pass() -> None:
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    for kw in ({**FAST, "illegal": "lose"}, {**FAST, "obs_mode": "both", "board": 3, "illegal": "lose"}):
-        env = gym.make(ENV_ID, **kw)
+    for env_id in (ENV_ID, "kinegym/TicTacToeDraw3x3BoardImage-v0"):
+        env = gym.make(env_id, **FAST, illegal="lose")
         check_env(env.unwrapped)
         sb3_check_env(env.unwrapped)
         env.close()
 
 
 def test_spaces_masks_and_info() -> None:
-    env = gym.make(ENV_ID, **FAST, obs_mode="both")
+    env = gym.make("kinegym/TicTacToeDrawBoardImage-v0", **FAST)
     obs, info = env.reset(seed=1)
     assert env.observation_space.contains(obs)
     assert obs["board"].shape == (5, 5, 2) and obs["image"].shape == (96, 128, 3)
@@ -113,18 +113,18 @@ def test_agent_as_o_sees_the_opponents_first_mark() -> None:
 def test_same_seed_same_game_bit_for_bit_across_processes() -> None:
     code = ("import gymnasium as gym, kinegym, numpy as np, sys; sys.path.insert(0, 'tests');"
             "from test_tictactoe_draw import play, digest;"
-            "env = gym.make('kinegym/TicTacToeDraw-v0', draw_physics=False, obs_mode='both', opponent='strong');"
+            "env = gym.make('kinegym/TicTacToeDrawBoardImage-v0', draw_physics=False, opponent='strong');"
             "print(digest(play(env, 11)[0]))")
     outs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
             for _ in range(2)]
-    env = gym.make(ENV_ID, **FAST, obs_mode="both", opponent="strong")
+    env = gym.make("kinegym/TicTacToeDrawBoardImage-v0", **FAST, opponent="strong")
     here = digest(play(env, 11)[0])
     assert outs[0] == outs[1] == here
     assert digest(play(env, 12)[0]) != here
 
 
 def test_physics_game_is_deterministic_and_pickles_by_replay() -> None:
-    env = gym.make(ENV_ID, board=3, erase=False).unwrapped
+    env = gym.make("kinegym/TicTacToeDraw3x3-v0", erase=False).unwrapped
     obs, info = env.reset(seed=5)
     env.step(int(np.flatnonzero(info["action_mask"])[0]))
     clone = pickle.loads(pickle.dumps(env))
@@ -137,7 +137,7 @@ def test_physics_game_is_deterministic_and_pickles_by_replay() -> None:
 
 
 def test_full_physics_game_to_the_end_with_erase() -> None:
-    env = gym.make(ENV_ID, board=3, opponent="strong")
+    env = gym.make("kinegym/TicTacToeDraw3x3-v0", opponent="strong")
     _, infos = play(env, 6)
     last = infos[-1]
     assert last["phase"] == "game over" and last["winner"] in ("X", "O", "draw")

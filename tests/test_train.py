@@ -21,16 +21,39 @@ SMALL = {"n_envs": 2, "n_timesteps": 1024, "n_steps": 64, "batch_size": 64, "n_e
 def small_config(tmp_path: Path, **changes: object) -> Path:
     base = yaml.safe_load((Path(T.__file__).parents[1] / "configs" / "train" /
                            "hole_climb_maskable_ppo.yaml").read_text())
-    base[T.ENV_ID].update({**SMALL, **changes})
+    (section,) = base.values()
+    section.update({**SMALL, **changes})
     p = tmp_path / "small.yaml"
     p.write_text(yaml.safe_dump(base))
     return p
 
 
+def test_config_reads_rl_zoo_spellings(tmp_path: Path) -> None:
+    """A Zoo hyperparameter section (its id fixes memory/hints, policy_kwargs as a string,
+    ppo_mask, !!float step counts) and kinegym's older spelling give the same config."""
+    zoo = tmp_path / "zoo.yml"
+    zoo.write_text("kinegym/HoleClimbMemoryHints-v0:\n  algo: ppo_mask\n  n_timesteps: !!float 2e5\n"
+                   "  policy: MlpPolicy\n  policy_kwargs: \"dict(net_arch=[64, 64], activation_fn=nn.ReLU)\"\n"
+                   "  env_kwargs: {wall_pool: 20}\n")
+    old = tmp_path / "old.yml"
+    old.write_text("kinegym/HoleClimb-v0:\n  n_timesteps: 200000\n  policy_kwargs: {net_arch: [64, 64], "
+                   "activation_fn: relu}\n  env_kwargs: {memory: true, hints: true, wall_pool: 20}\n")
+    a, b = T.load_train_config(zoo), T.load_train_config(old)
+    assert a == b and a["env_kwargs"]["memory"] and a["n_timesteps"] == 200_000 and a["algo"] == "maskable_ppo"
+    assert a["policy_kwargs"] == {"net_arch": [64, 64], "activation_fn": "relu"}
+    bad = tmp_path / "bad.yml"
+    bad.write_text("kinegym/HoleClimbMemory-v0:\n  env_kwargs: {hints: true}\n")
+    with pytest.raises(ConfigError, match=r"HoleClimbMemory-v0.env_kwargs.hints"):
+        T.load_train_config(bad)
+    bad.write_text("kinegym/HoleClimb-v0:\n  policy_kwargs: \"dict(net_arch=__import__('os'))\"\n")
+    with pytest.raises(ConfigError, match="policy_kwargs"):
+        T.load_train_config(bad)
+
+
 def test_config_is_validated_with_file_key_and_value(tmp_path: Path) -> None:
     cfg = T.load_train_config()
     assert cfg["algo"] == "maskable_ppo" and cfg["n_envs"] >= 1
-    with pytest.raises(ConfigError, match=r"HoleClimb-v0.learning_rate: 'fast' is not valid"):
+    with pytest.raises(ConfigError, match=r"HoleClimbMemoryHints-v0.learning_rate: 'fast' is not valid"):
         T.load_train_config(small_config(tmp_path, learning_rate="fast"))
     with pytest.raises(ConfigError, match="n_envs"):
         T.load_train_config(small_config(tmp_path, n_envs=0))

@@ -49,7 +49,10 @@ def cmd_climb(args: argparse.Namespace) -> int:
 
         kwargs = {**policy_env_kwargs(args.policy), **kwargs}
     try:
-        env = gym.make("kinegym/HoleClimb-v0", render_mode="rgb_array" if args.gif else None, **kwargs)
+        from kinegym.envs.variants import split_space_kwargs
+
+        env_id, kwargs = split_space_kwargs("kinegym/HoleClimb-v0", kwargs)  # memory/hints name their own id
+        env = gym.make(env_id, render_mode="rgb_array" if args.gif else None, **kwargs)
         env.reset(seed=args.seed)
     except RuntimeError as err:  # no route on a fixed wall for this robot
         emit(args, {"error": "NoRoute", "message": str(err)}, f"kinegym: {err}")
