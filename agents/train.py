@@ -153,8 +153,8 @@ class _PolicyKwargs(_Section):
             try:
                 value = parse_zoo_dict(value)
             except ValueError as exc:
-                raise _configs.ConfigError(source, key, value, f"a mapping or RL Zoo's 'dict(key=value, ...)' ({exc})") \
-                    from None
+                want = f"a mapping or RL Zoo's 'dict(key=value, ...)' ({exc})"
+                raise _configs.ConfigError(source, key, value, want) from None
         return super().check(value, source, key)
 
 
@@ -183,8 +183,8 @@ def parse_zoo_dict(text: str) -> dict[str, Any]:
         try:
             out[str(kw.arg)] = ast.literal_eval(v)
         except ValueError:
-            raise ValueError(f"{kw.arg}={ast.unparse(v)} is not a literal or one of nn.{', nn.'.join(ACTIVATIONS.values())}")\
-                from None
+            known = ", ".join(f"nn.{v}" for v in ACTIVATIONS.values())
+            raise ValueError(f"{kw.arg}={ast.unparse(v)} is not a literal or one of {known}") from None
     return out
 
 
