@@ -136,11 +136,12 @@ def test_every_schema_answers_fuzzed_yaml_with_a_config_error(kind: str, data: s
     doc = base
     if kind == "train":
         doc = dict(base)
-        section = dict(doc["kinegym/HoleClimb-v0"])
+        (env_id,) = doc
+        section = dict(doc[env_id])
         key = data.draw(st.sampled_from(sorted(section) + ["env_kwargs.wall_kwargs", "policy_kwargs.net_arch",
                                                             "unknown"]))
         section[key.split(".")[0]] = data.draw(yaml_values)
-        doc["kinegym/HoleClimb-v0"] = section
+        doc[env_id] = section
     elif isinstance(base, dict):
         doc = dict(base)
         key = data.draw(st.sampled_from(sorted(doc) + ["unknown"]))
