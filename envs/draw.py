@@ -257,3 +257,36 @@ def draw_climb(holes: HoleMap, goal: int, pose: object, q: object, geom: Climber
     canvas.circle(est[:2], 0.6, (220, 60, 60), fill=True)
     canvas.caption(list(caption))
     return canvas.image
+
+
+def board_panel(belief: np.ndarray, own: int, last_read: dict, photo: np.ndarray | None, height: int,
+                width: int = 260) -> np.ndarray:
+    """The TicTacToeDraw side panel: the board as read (the arm's marks in blue), whether the
+    last reading was accepted, and a thumbnail of the camera's photo."""
+    n = belief.shape[0]
+    panel = np.empty((height, width, 3), np.uint8)
+    panel[...] = (245, 245, 240)
+    text = dict(fontFace=cv2.FONT_HERSHEY_SIMPLEX, lineType=cv2.LINE_AA)
+    cv2.putText(panel, "board as read", (10, 22), fontScale=0.55, color=(20, 20, 20), thickness=1, **text)
+    cs = min(40, (width - 20) // n)
+    x0, y0 = 10, 35
+    for r in range(n):
+        for c in range(n):
+            p0 = (x0 + c * cs, y0 + r * cs)
+            cv2.rectangle(panel, p0, (p0[0] + cs, p0[1] + cs), (150, 150, 150), 1)
+            v = int(belief[r, c])
+            if v:
+                col = (25, 60, 175) if v == own else (30, 30, 30)
+                cv2.putText(panel, "XO"[v - 1], (p0[0] + cs // 4, p0[1] + 3 * cs // 4), fontScale=cs / 35, color=col,
+                            thickness=2, **text)
+    y = y0 + n * cs + 20
+    cv2.putText(panel, f"read ok: {last_read.get('read_ok')}  tries: {last_read.get('read_tries', 0)}", (10, y),
+                fontScale=0.45, color=(20, 20, 20), thickness=1, **text)
+    if photo is not None:
+        th = int(round(photo.shape[0] * (width - 20) / photo.shape[1]))
+        thumb = cv2.resize(photo, (width - 20, th), interpolation=cv2.INTER_AREA)
+        y1 = min(height - th - 5, y + 15)
+        if y1 > y:
+            panel[y1:y1 + th, 10:10 + width - 20] = thumb
+            cv2.putText(panel, "camera", (10, y1 - 4), fontScale=0.4, color=(60, 60, 60), thickness=1, **text)
+    return panel

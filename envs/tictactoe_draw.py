@@ -3,6 +3,10 @@ the field and its marks, a camera reads the board, an opponent draws by hand.
 
 ## Description
 
+This is the two-player game of :mod:`kinegym.envs.tictactoe_aec` (a PettingZoo AEC env, agents
+``"arm"`` and ``"person"``) seen from the arm's side, with a policy playing the person: a thin
+wrapper that steps the arm's move, then the opponent's, and returns the arm's observation.
+
 The agent is the arm's player. Each step it picks a cell; the arm draws its mark there
 (in pymunk with ``draw_physics=True``, the default - :class:`kinegym.envs.sim.arm.ArmSim`; as ideal
 strokes with ``draw_physics=False``, for speed). Then the opponent inside the env
@@ -76,9 +80,11 @@ synthetic hand mark for it.
 
 ## Arguments
 
-``gymnasium.make("kinegym/TicTacToeDraw-v0", board=5, k=None, agent_symbol="X",
-opponent="thesis", draw_physics=True, draw_field=True, erase=True, obs_mode="board",
-camera="default", max_read_tries=3, arm="thesis_rrrr", homing=False, render_mode=None)``.
+``gymnasium.make("kinegym/TicTacToeDraw-v0", k=None, agent_symbol="X", opponent="thesis",
+draw_physics=True, draw_field=True, erase=True, camera="default", max_read_tries=3,
+arm="thesis_rrrr", homing=False, illegal="raise", render_mode=None)``. ``board`` (5 or 3) and
+``obs_mode`` change the spaces, so each pair is its own id (:mod:`kinegym.envs.variants`):
+``kinegym/TicTacToeDraw3x3-v0``, ``...Image-v0``, ``...BoardImage-v0`` (``obs_mode="both"``).
 The registered id gives the env the players of :mod:`kinegym.agents.minimax` (``"strong"`` is
 :class:`~agents.minimax.StrongPlayer` with its budget counted in search nodes, so seeded
 games replay bit for bit).
@@ -98,7 +104,7 @@ import numpy as np
 from gymnasium import spaces
 
 from kinegym.envs.errors import ResetNeededError, check_action
-from kinegym.envs.game import EMPTY, Board, Game, O, X
+from kinegym.envs.game import EMPTY, Board, O, X
 
 __all__ = ["TicTacToeDrawEnv", "random_opponent", "OpponentFactory"]
 
@@ -125,39 +131,31 @@ class TicTacToeDrawEnv(gym.Env):
                  draw_field: bool = True, erase: bool = True, obs_mode: str = "board", camera: str = "default",
                  max_read_tries: int = 3, image_obs_size: tuple[int, int] = (128, 96), arm: str = "thesis_rrrr",
                  homing: bool = False, render_mode: str | None = None, illegal: str = "raise") -> None:
-        if illegal not in ("raise", "lose"):
-            raise ValueError(f"illegal={illegal!r}; expected 'raise' (an occupied cell is an error) or 'lose'")
-        self.illegal = illegal
+        from kinegym.envs.tictactoe_aec import TicTacToeDrawAEC
+
         self._kwargs = dict(board=board, k=k, agent_symbol=agent_symbol, opponent=opponent, opponents=opponents,
                             illegal=illegal, draw_physics=draw_physics, draw_field=draw_field, erase=erase,
                             obs_mode=obs_mode, camera=camera, max_read_tries=max_read_tries,
                             image_obs_size=image_obs_size, arm=arm, homing=homing, render_mode=render_mode)
-        if board not in (3, 5):
-            raise ValueError(f"board={board!r}; expected 3 or 5 (cells a side)")
-        k = (3 if board == 3 else 4) if k is None else int(k)
-        if not 2 <= k <= board:
-            raise ValueError(f"k={k!r}; expected 2..{board} in a row")
         if agent_symbol not in _SYM:
             raise ValueError(f"agent_symbol={agent_symbol!r}; expected 'X' (moves first) or 'O'")
         if obs_mode not in ("board", "image", "both"):
             raise ValueError(f"obs_mode={obs_mode!r}; expected 'board', 'image' or 'both'")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; expected one of {self.metadata['render_modes']} or None")
-        if not (isinstance(max_read_tries, int) and max_read_tries >= 1):
-            raise ValueError(f"max_read_tries={max_read_tries!r}; expected an integer >= 1")
         self._opponents: dict[str, OpponentFactory] = {"random": random_opponent, **(opponents or {})}
         if isinstance(opponent, str) and opponent not in self._opponents:
             raise ValueError(f"opponent={opponent!r}; expected a callable Board -> cell or one of "
                              f"{sorted(self._opponents)} (gymnasium.make('kinegym/TicTacToeDraw-v0') brings "
                              "'strong' and 'thesis')")
-        self.n, self.k = board, k
-        self.game = Game(board, board, k)
-        self.agent = _SYM[agent_symbol]
-        self.opp = O if self.agent == X else X
+        #: the two-player game this env plays the arm's side of
+        self.aec = TicTacToeDrawAEC(board=board, k=k, arm_symbol=agent_symbol, draw_physics=draw_physics,
+                                    draw_field=draw_field, erase=erase, camera=camera,
+                                    max_read_tries=max_read_tries, arm=arm, homing=homing, illegal=illegal)
+        self.illegal, self.n, self.k, self.game = illegal, board, self.aec.k, self.aec.game
+        self.agent, self.opp = self.aec.symbol["arm"], self.aec.symbol["person"]
         self.opponent_spec = opponent
-        self.draw_physics, self.draw_field, self.erase = bool(draw_physics), bool(draw_field), bool(erase)
-        self.obs_mode, self.camera_preset = obs_mode, camera
-        self.max_read_tries = max_read_tries
+        self.obs_mode, self.max_read_tries = obs_mode, max_read_tries
         self.image_obs_size = (int(image_obs_size[0]), int(image_obs_size[1]))
         self.render_mode = render_mode
         self.action_space = spaces.Discrete(board * board)
@@ -166,120 +164,25 @@ class TicTacToeDrawEnv(gym.Env):
         image_space = spaces.Box(0, 255, (h, w, 3), np.uint8)
         self.observation_space = {"board": board_space, "image": image_space,
                                   "both": spaces.Dict({"board": board_space, "image": image_space})}[obs_mode]
-        from kinegym.envs.sim.arm import ArmSim  # pymunk: only once an env is made
-        from kinegym.vision.board_reader import BoardReader
-
-        self.sim = ArmSim(arm, homing=False)
-        self.homing = bool(homing)
-        self.layout = self.sim.layout if board == self.sim.layout.n else self.sim.layout.with_field(n=board)
-        self.reader = BoardReader(size=board)
         self._history: list[tuple[str, Any]] = []
         self._window: Any = None
-        self.true_board: Board = self.game.empty()
-        self.belief = np.zeros((board, board), np.int64)
-        self._photo: np.ndarray | None = None
-        self._status: list[str] = []
-        self._last_read: dict[str, Any] = {}
+        self._step_mark = 0
         self._done = True
-        #: called with a rendered frame every ``frame_every_s`` of simulated drawing (GIFs)
-        self.on_frame: Callable[[np.ndarray], None] | None = None
-        self.frame_every_s = 1.0
 
-    # ------------------------------------------------------------------ drawing
-    def _arm_draw(self, strokes: list[Any]) -> None:
-        if not strokes:
-            return
-        if self.draw_physics:
-            hook = self.on_frame
-            self.sim.draw(strokes, on_frame=(lambda _s: hook(self._frame())) if hook else None,
-                          frame_every_s=self.frame_every_s)
-            return
-        sp = self.sim.cfg["sponge"]
-        for st in strokes:
-            if st.tool == "sponge":
-                self.sim.canvas.erase(st.points, sp["width_cm"], sp["efficiency"])
-            else:
-                self.sim.canvas.stroke(st.points, self.sim.pen)
-            if self.on_frame is not None:  # ideal strokes: a frame per stroke
-                self.on_frame(self._frame())
+    # ------------------------------------------------------------------ the game's parts, by their old names
+    sim = property(lambda self: self.aec.sim, doc="the arm's simulation and its board canvas")
+    layout = property(lambda self: self.aec.layout, doc="where the field and its cells lie on the board")
+    true_board = property(lambda self: self.aec.true_board, doc="the board as it really is")
+    belief = property(lambda self: self.aec.belief, doc="the board as last accepted from the camera")
+    photo = property(lambda self: self.aec.photo, doc="the camera's last photo (RGB)")
+    _status = property(lambda self: self.aec.log[self._step_mark:], doc="this step's messages so far")
+    reader = property(lambda self: self.aec.reader, lambda self, r: setattr(self.aec, "reader", r),
+                      doc="the board reader")
+    on_frame = property(lambda self: self.aec.on_frame, lambda self, f: setattr(self.aec, "on_frame", f),
+                        doc="called with a rendered frame every ``frame_every_s`` of simulated drawing (GIFs)")
+    frame_every_s = property(lambda self: self.aec.frame_every_s,
+                             lambda self, v: setattr(self.aec, "frame_every_s", v))
 
-    def _arm_mark(self, cell: int) -> None:
-        from kinegym.envs.sim import strokes as S
-
-        r, c = divmod(cell, self.n)
-        st = S.x_strokes(self.layout, r, c) if self.agent == X else S.o_strokes(self.layout, r, c)
-        self._status.append(f"the manipulator is drawing {_NAME[self.agent]} in cell ({r}, {c})")
-        self._arm_draw(st)
-
-    def _hand_mark(self, cell: int) -> None:
-        from kinegym.envs.sim.board import PENS
-        from kinegym.envs.sim.scenes import draw_mark
-
-        r, c = divmod(cell, self.n)
-        centre = self.layout.cell_centre(r, c)
-        draw_mark(self.sim.canvas, self.opp, centre, 0.6 * self.layout.cell, PENS["black"], self.np_random)
-        self._status.append(f"the opponent drew {_NAME[self.opp]} in cell ({r}, {c})")
-
-    # ------------------------------------------------------------------ reading
-    def _consistent(self, cells: np.ndarray, arm_cells: list[int], opp_new: int) -> str | None:
-        """None if ``cells`` is what the last accepted board plus the known changes allow,
-        else what is wrong."""
-        prev = self.belief.ravel()
-        now = cells.ravel()
-        changed = np.flatnonzero(prev != now)
-        bad_old = [int(i) for i in changed if prev[i] != EMPTY]
-        if bad_old:
-            i = bad_old[0]
-            return f"cell {divmod(i, self.n)} was {_NAME[int(prev[i])]} and now reads {_NAME[int(now[i])]}"
-        for i in arm_cells:
-            if now[i] != self.agent:
-                return f"the arm's {_NAME[self.agent]} in cell {divmod(i, self.n)} reads {_NAME[int(now[i])]}"
-        new = [int(i) for i in changed if i not in arm_cells]
-        wrong = [i for i in new if now[i] != self.opp]
-        if wrong:
-            return (f"new {_NAME[int(now[wrong[0]])]} in cell {divmod(wrong[0], self.n)}, "
-                    f"expected only {_NAME[self.opp]}")
-        if len(new) != opp_new:
-            return f"{len(new)} new {_NAME[self.opp]} marks seen, expected {opp_new}"
-        return None
-
-    def _read(self, arm_cells: list[int], opp_new: int) -> None:
-        """Photograph and read until consistent (or out of tries); updates the belief."""
-        from kinegym.envs.sim.camera import Camera
-        from kinegym.vision.errors import VisionError
-
-        self._status.append("reading the board")
-        aim = self.layout.field_centre
-        err: str | None = "no photo"
-        tries, conf = 0, 0.0
-        cells = None
-        for _ in range(self.max_read_tries):
-            tries += 1
-            cam = Camera(self.camera_preset, seed=self.np_random)
-            photo = cam.photograph(self.sim.canvas, aim)
-            self._photo = photo.image
-            try:
-                reading = self.reader.read(photo.image)
-            except VisionError as exc:
-                err = f"no board found ({exc})"
-                continue
-            err = self._consistent(reading.cells, arm_cells, opp_new)
-            if err is None:
-                cells, conf = reading.cells.astype(np.int64), float(reading.confidence.min())
-                break
-            self._status.append(f"inconsistent reading ({err}): photographing again")
-        if cells is not None:
-            self.belief = cells
-            self._pending_arm, self._pending_opp = [], 0
-        else:  # keep what is known for sure: the last accepted board and the arm's own marks
-            self._pending_arm, self._pending_opp = list(arm_cells), opp_new
-            for i in arm_cells:
-                self.belief.flat[i] = self.agent
-            self._status.append(f"could not read the board consistently in {tries} tries: {err}")
-        self._last_read = {"read_ok": cells is not None, "read_error": None if cells is not None else err,
-                           "read_tries": tries, "read_confidence": conf}
-
-    # ------------------------------------------------------------------ observation
     def action_masks(self) -> np.ndarray:
         """Cells free on the board as read (all False once the game is over). Through
         ``gymnasium.make``'s wrappers: ``env.get_wrapper_attr("action_masks")()``. Before the
@@ -288,29 +191,23 @@ class TicTacToeDrawEnv(gym.Env):
             raise ResetNeededError("action_masks() before reset(): there is no board yet; call reset() first")
         if self._done:
             return np.zeros(self.n * self.n, bool)
-        return self.belief.ravel() == EMPTY
+        return self.aec.legal_cells()
 
     def _obs(self) -> Any:
-        b = np.zeros((self.n, self.n, 2), np.int8)
-        b[..., 0] = self.belief == self.agent
-        b[..., 1] = self.belief == self.opp
+        b = self.aec.observe("arm")["observation"]
         if self.obs_mode == "board":
             return b
         import cv2
 
         img = np.zeros((self.image_obs_size[1], self.image_obs_size[0], 3), np.uint8)
-        if self._photo is not None:
-            img = cv2.resize(self._photo, self.image_obs_size, interpolation=cv2.INTER_AREA)
+        if self.aec.photo is not None:
+            img = cv2.resize(self.aec.photo, self.image_obs_size, interpolation=cv2.INTER_AREA)
         return img if self.obs_mode == "image" else {"board": b, "image": img}
 
     def _info(self, **extra: Any) -> dict[str, Any]:
-        w = self.true_board.winner
-        winner = None if not self.true_board.is_over else ("draw" if w == EMPTY else _NAME[w])
-        return {"phase": "game over" if self._done else "your move", "status": list(self._status),
-                "true_board": str(self.true_board), "read_board": "|".join(
-                    "".join(_NAME[int(v)] for v in row) for row in self.belief),
-                **self._last_read, "winner": winner, "action_mask": self.action_masks(),
-                "is_success": winner == _NAME[self.agent], "arm_time_s": self.sim.time_s, **extra}
+        info = self.aec._info()
+        return {"phase": "game over" if self._done else "your move", **info, "status": self._status,
+                "action_mask": self.action_masks(), "is_success": info["winner"] == _NAME[self.agent], **extra}
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict]:
@@ -319,84 +216,44 @@ class TicTacToeDrawEnv(gym.Env):
             self._history = [("reset", self.np_random_seed)]
         else:
             self._history.append(("reset", None))
-        from kinegym.envs.sim.board import BoardCanvas
-
-        w, h = self.sim.layout.canvas_size
-        self.sim.canvas = BoardCanvas(w, h, self.sim.canvas.px_per_cm)
-        self.sim.reset(seed=int(self.np_random.integers(2**31)), homing=self.homing)
-        self.sim.time_s = 0.0
+        self.aec.new_game(self.np_random)
+        self._step_mark = 0
         spec = self.opponent_spec
         self._opponent = spec if callable(spec) else self._opponents[spec](int(self.np_random.integers(2**31)))
-        self.true_board = self.game.empty()
-        self.belief = np.zeros((self.n, self.n), np.int64)
-        self._pending_arm, self._pending_opp = [], 0
-        self._status, self._done = [], False
-        if self.draw_field:
-            from kinegym.envs.sim import strokes as S
-
-            self._status.append("the manipulator is drawing the playing field")
-            self._arm_draw(S.field_strokes(self.layout))
-        opp_new = 0
+        self._done = False
+        cell = -1
         if self.opp == X:
-            self._status.append("waiting for the opponent")
+            self.aec.log.append("waiting for the opponent")
             cell = self._opponent_move()
-            opp_new = 1
-        else:
-            cell = -1
-        self._read([], opp_new)
-        return self._obs(), self._info(opponent_move=cell, illegal=False)
+        obs = self._obs()  # the camera reads the board
+        return obs, self._info(opponent_move=cell, illegal=False)
 
     def _opponent_move(self) -> int:
+        """The opponent looks at the real board (a person at the board, not the camera) and draws."""
         cell = int(self._opponent(self.true_board))
         if not self.true_board.is_legal(cell):
             raise RuntimeError(f"the opponent chose cell {cell}, illegal on {self.true_board}")
-        self.true_board = self.true_board.play(cell)
-        if getattr(self._opponent, "draws_itself", False):  # a person at the board: the ink is theirs
-            self._status.append(f"the opponent drew {_NAME[self.opp]} in cell {divmod(cell, self.n)}")
-        else:
-            self._hand_mark(cell)
+        self.aec.person_inks = not getattr(self._opponent, "draws_itself", False)  # a person at the board inks
+        self.aec.play_unobserved(cell)
         return cell
-
-    def _finish(self) -> None:
-        self._done = True
-        w = self.true_board.winner
-        self._status.append("game over: " + ("draw" if w == EMPTY else f"{_NAME[w]} wins"))
-        if self.erase:
-            from kinegym.envs.sim import strokes as S
-
-            self._status.append("the manipulator is erasing the board")
-            self._arm_draw(S.erase_strokes(self.layout, self.sim.spec))
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
         if self._done:
             raise ResetNeededError("step() without a live game: call reset() first (the game ended or never began)")
         a = check_action(action, self.n * self.n, self.action_masks() if self.illegal == "raise" else None)
         self._history.append(("step", a))
-        self._status = []
-        if self.belief.flat[a] != EMPTY:
-            self._done = True
-            self._status.append(f"cell {divmod(a, self.n)} is occupied: an illegal move loses")
-            return self._obs(), -1.0, True, False, self._info(opponent_move=-1, illegal=True)
-        if not self.true_board.is_legal(a):  # free as read, taken in truth: a misread got through
-            self._done = True
-            self._last_read = {**self._last_read, "read_error": f"cell {divmod(a, self.n)} is occupied on the "
-                               "real board though the last accepted reading showed it free"}
-            return self._obs(), 0.0, False, True, self._info(opponent_move=-1, illegal=False)
-        self.true_board = self.true_board.play(a)
-        self._arm_mark(a)
-        arm_cells = [*self._pending_arm, a]
-        opp_new, cell = self._pending_opp, -1
-        if not self.true_board.is_over:
-            self._status.append("waiting for the opponent")
+        self._step_mark = len(self.aec.log)
+        aec = self.aec
+        aec.step(a)
+        reward, cell = float(aec.rewards["arm"]), -1
+        illegal = bool(aec.terminations["arm"] and aec.rewards["arm"] < 0 and not aec.true_board.is_over)
+        if aec.live:
             cell = self._opponent_move()
-            opp_new += 1
-        self._read(arm_cells, opp_new)
-        reward = 0.0
-        if self.true_board.is_over:
-            w = self.true_board.winner
-            reward = 1.0 if w == self.agent else (-1.0 if w == self.opp else 0.0)
-            self._finish()
-        return self._obs(), reward, self._done, False, self._info(opponent_move=cell, illegal=False)
+            reward += float(aec.rewards["arm"])
+        self._done = not aec.live
+        obs = self._obs()
+        return obs, reward, bool(aec.terminations["arm"]), bool(aec.truncations["arm"]), self._info(
+            opponent_move=cell, illegal=illegal)
 
     # ------------------------------------------------------------------ pictures
     def render(self) -> np.ndarray | None:
@@ -414,40 +271,10 @@ class TicTacToeDrawEnv(gym.Env):
         return None
 
     def _frame(self) -> np.ndarray:
-        import cv2
-
-        arm = self.sim.render(scale=20.0, status=self._status[-2:])
-        h = arm.shape[0]
-        pw = 260
-        panel = np.empty((h, pw, 3), np.uint8)
-        panel[...] = (245, 245, 240)
-        cv2.putText(panel, "board as read", (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (20, 20, 20), 1, cv2.LINE_AA)
-        cs = min(40, (pw - 20) // self.n)
-        x0, y0 = 10, 35
-        for r in range(self.n):
-            for c in range(self.n):
-                p0 = (x0 + c * cs, y0 + r * cs)
-                cv2.rectangle(panel, p0, (p0[0] + cs, p0[1] + cs), (150, 150, 150), 1)
-                v = int(self.belief[r, c])
-                if v != EMPTY:
-                    col = (25, 60, 175) if v == self.agent else (30, 30, 30)
-                    cv2.putText(panel, _NAME[v], (p0[0] + cs // 4, p0[1] + 3 * cs // 4), cv2.FONT_HERSHEY_SIMPLEX,
-                                cs / 35, col, 2, cv2.LINE_AA)
-        y = y0 + self.n * cs + 20
-        ok = self._last_read.get("read_ok")
-        cv2.putText(panel, f"read ok: {ok}  tries: {self._last_read.get('read_tries', 0)}", (10, y),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.45, (20, 20, 20), 1, cv2.LINE_AA)
-        if self._photo is not None:
-            th = int(round(self._photo.shape[0] * (pw - 20) / self._photo.shape[1]))
-            thumb = cv2.resize(self._photo, (pw - 20, th), interpolation=cv2.INTER_AREA)
-            y1 = min(h - th - 5, y + 15)
-            if y1 > y:
-                panel[y1:y1 + th, 10:10 + pw - 20] = thumb
-                cv2.putText(panel, "camera", (10, y1 - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1,
-                            cv2.LINE_AA)
-        return np.hstack([arm, panel])
+        return self.aec.frame()
 
     def close(self) -> None:
+        self.aec.close()
         if self._window is not None:
             self._window.close()
             self._window = None

@@ -165,8 +165,8 @@ def _demo_game(out: Path, quick: bool) -> dict[str, Any]:
         right.append(info["read_board"] == info["true_board"])
         frames.append(env.render())
         done = term or trunc
-        if done and u._photo is not None:
-            board_png = save_rgb(u._photo, out / "game_photo.png")  # the camera's last look before the wipe
+        if done and u.photo is not None:
+            board_png = save_rgb(u.photo, out / "game_photo.png")  # the camera's last look before the wipe
             if before_erase < len(frames) - 1:
                 save_rgb(frames[before_erase], out / "game_board.png")
     gif = save_gif(frames, out / "game.gif", 4) if frames else None
