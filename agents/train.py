@@ -349,7 +349,8 @@ def _monitor_rows(run: Path) -> tuple[np.ndarray, np.ndarray]:
 def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
     """``learning_curve.png``: validation success (evaluation callback) and the rolling
     training success over env steps (earlier runs of a resumed chain included)."""
-    from kinegym.envs.draw import line_chart, save_rgb
+    from kinegym.envs.charts import line_chart
+    from kinegym.envs.draw import save_rgb
 
     series: dict[str, tuple[Any, Any]] = {}
     xs, ys = [], []

@@ -18,7 +18,7 @@ from kinegym.kinematics.climber import ClimberGeometry, body_to_wall, elbow_posi
 from kinegym.kinematics.holes import HoleMap
 from kinegym.vision.image_io import write_image
 
-__all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "line_chart", "save_rgb",
+__all__ = ["Canvas", "draw_wall", "draw_climber", "fit_canvas", "live_chart", "nice_ticks", "save_rgb",
     "save_gif", "ARM_COLOURS"]
 
 Colour = tuple[int, int, int]
@@ -138,67 +138,72 @@ _SERIES: tuple[Colour, ...] = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (25
                                (140, 86, 75))
 
 
-def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
-               ylabel: str, size: tuple[int, int] = (720, 420), log_x: bool = False,
-               ylim: tuple[float, float] | None = None, markers: bool = True) -> np.ndarray:
-    """A small line chart (RGB array) of named ``(x, y)`` series, drawn with OpenCV.
+def nice_ticks(lo: float, hi: float, n: int = 5) -> list[float]:
+    """About ``n`` round tick values (steps of 1, 2 or 5 times a power of ten) within [lo, hi]."""
+    span = hi - lo
+    if not (np.isfinite(span) and span > 0):
+        return [lo]
+    raw = span / max(1, n)
+    mag = 10.0 ** np.floor(np.log10(raw))
+    step = next(m * mag for m in (1, 2, 5, 10) if m * mag >= raw)
+    first = np.ceil(lo / step - 1e-9) * step
+    return [float(round(v, 12)) for v in np.arange(first, hi + step * 1e-9, step)]
 
-    Enough for the project's study plots without a plotting dependency: axes with ticks
-    (one per distinct x for a few points, six evenly spaced otherwise), one colour per
-    series (with markers unless ``markers=False``, for long time series), a legend, a
-    title and axis labels.
-    """
+
+def live_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
+               ylabel: str, size: tuple[int, int] = (345, 160), ylim: tuple[float, float] | None = None,
+               markers: bool = False) -> np.ndarray:
+    """A small line chart (RGB array) drawn with OpenCV in about a millisecond, for panels that
+    refresh every frame (the arm's window); round ticks (:func:`nice_ticks`), the legend in a
+    row above the plot, the y unit in the title line. Charts written to files use
+    :func:`kinegym.envs.charts.line_chart` (matplotlib)."""
     w, h = size
     img = np.empty((h, w, 3), np.uint8)
     img[...] = (255, 255, 255)
-    left, right, top, bottom = 70, 20, 40, 55
+    left, right, top, bottom = 44, 8, 34, 30
     xs = np.concatenate([np.asarray(s[0], float) for s in series.values()])
     ys = np.concatenate([np.asarray(s[1], float) for s in series.values()])
     ys = ys[np.isfinite(ys)]
-    fx = np.log10 if log_x else (lambda v: np.asarray(v, float))
-    x0, x1 = float(np.min(fx(xs))), float(np.max(fx(xs)))
-    if x1 == x0:
+    x0, x1 = (float(xs.min()), float(xs.max())) if len(xs) else (0.0, 1.0)
+    if x1 <= x0:
         x0, x1 = x0 - 1, x1 + 1
-    y0, y1 = ylim if ylim else (min(0.0, float(ys.min()) if len(ys) else 0.0), float(ys.max()) if len(ys) else 1.0)
-    if y1 == y0:
-        y1 = y0 + 1
-    pad = 0.05 * (x1 - x0)
-    x0, x1 = x0 - pad, x1 + pad
+    y0, y1 = ylim if ylim else ((float(ys.min()), float(ys.max())) if len(ys) else (0.0, 1.0))
+    if y1 <= y0:
+        y0, y1 = y0 - 1, y1 + 1
+    pad = 0.06 * (y1 - y0)
+    y0, y1 = (y0, y1) if ylim else (y0 - pad, y1 + pad)
 
     def to_px(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        u = left + (fx(x) - x0) / (x1 - x0) * (w - left - right)
+        u = left + (np.asarray(x, float) - x0) / (x1 - x0) * (w - left - right)
         v = h - bottom - (np.asarray(y, float) - y0) / (y1 - y0) * (h - top - bottom)
         return np.stack([u, v], -1).round().astype(np.int32)
 
-    cv2.rectangle(img, (left, top), (w - right, h - bottom), (60, 60, 60), 1)
-    for k in range(6):
-        yv = y0 + k * (y1 - y0) / 5
-        v = int(round(h - bottom - k * (h - top - bottom) / 5))
-        cv2.line(img, (left, v), (w - right, v), (225, 225, 225), 1)
-        cv2.putText(img, f"{yv:.3g}", (5, v + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1, cv2.LINE_AA)
-    ticks = sorted(set(np.round(xs, 6).tolist()))
-    if len(ticks) > 12:
-        ticks = np.round(np.linspace(float(np.min(xs)), float(np.max(xs)), 6), 3).tolist()
-    for xv in ticks:
+    font, grey = cv2.FONT_HERSHEY_SIMPLEX, (60, 60, 60)
+    cv2.rectangle(img, (left, top), (w - right, h - bottom), grey, 1)
+    for yv in nice_ticks(y0, y1, 4):
+        v = int(to_px(np.array([x0]), np.array([yv]))[0, 1])
+        cv2.line(img, (left, v), (w - right, v), (228, 228, 228), 1)
+        cv2.putText(img, f"{yv:g}", (3, v + 4), font, 0.33, grey, 1, cv2.LINE_AA)
+    for xv in nice_ticks(x0, x1, 5):
         u = int(to_px(np.array([xv]), np.array([y0]))[0, 0])
-        cv2.line(img, (u, h - bottom), (u, h - bottom + 5), (60, 60, 60), 1)
-        cv2.putText(img, f"{xv:g}", (u - 12, h - bottom + 20), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (60, 60, 60), 1,
-                    cv2.LINE_AA)
+        cv2.line(img, (u, h - bottom), (u, h - bottom + 4), grey, 1)
+        cv2.putText(img, f"{xv:g}", (u - 8, h - bottom + 14), font, 0.33, grey, 1, cv2.LINE_AA)
+    lx = left
     for i, (name, (x, y)) in enumerate(series.items()):
         col = _SERIES[i % len(_SERIES)]
         y_arr = np.asarray(y, float)
         ok = np.isfinite(y_arr)
         pts = to_px(np.asarray(x, float)[ok], y_arr[ok])
         if len(pts) > 1:
-            cv2.polylines(img, [pts.reshape(-1, 1, 2)], False, col, 2, cv2.LINE_AA)
+            cv2.polylines(img, [pts.reshape(-1, 1, 2)], False, col, 1, cv2.LINE_AA)
         for p in pts if markers else ():
-            cv2.circle(img, (int(p[0]), int(p[1])), 4, col, -1, cv2.LINE_AA)
-        ly = top + 16 + 18 * i
-        cv2.line(img, (left + 10, ly - 4), (left + 30, ly - 4), col, 2, cv2.LINE_AA)
-        cv2.putText(img, name, (left + 36, ly), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (40, 40, 40), 1, cv2.LINE_AA)
-    cv2.putText(img, title, (left, 25), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (20, 20, 20), 1, cv2.LINE_AA)
-    cv2.putText(img, xlabel, (w // 2 - 60, h - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (40, 40, 40), 1, cv2.LINE_AA)
-    cv2.putText(img, ylabel, (5, top - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (40, 40, 40), 1, cv2.LINE_AA)
+            cv2.circle(img, (int(p[0]), int(p[1])), 3, col, -1, cv2.LINE_AA)
+        if len(series) > 1:  # the legend: a row above the plot, never over the data
+            cv2.line(img, (lx, top - 8), (lx + 12, top - 8), col, 2, cv2.LINE_AA)
+            cv2.putText(img, name, (lx + 15, top - 4), font, 0.33, (40, 40, 40), 1, cv2.LINE_AA)
+            lx += 22 + 6 * len(name)
+    cv2.putText(img, f"{title}  [{ylabel}]" if ylabel else title, (4, 13), font, 0.4, (20, 20, 20), 1, cv2.LINE_AA)
+    cv2.putText(img, xlabel, (w // 2 - 20, h - 4), font, 0.35, (40, 40, 40), 1, cv2.LINE_AA)
     return img
 
 

@@ -31,7 +31,7 @@ def _play(aec: TicTacToeDrawAEC, seed: int, picks: int = 0) -> str:
     photo and the ink on the board."""
     aec.reset(seed=seed)
     h = hashlib.sha256()
-    for agent in aec.agent_iter():
+    for _agent in aec.agent_iter():
         obs, reward, term, trunc, info = aec.last()
         h.update(obs["observation"].tobytes() + obs["action_mask"].tobytes() + str(reward).encode())
         h.update(aec.photo.tobytes() + aec.sim.canvas.density.tobytes())  # what the camera saw, the ink

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinegym.envs.draw import line_chart
+from kinegym.envs.charts import line_chart
 
 from .arm import ArmSim, Recording
 from .strokes import TOOL_PEN, Trajectory, _move, parallel_lines, sine_stroke

@@ -212,7 +212,8 @@ def _plot_localisation(path: str, wall: Any, q: np.ndarray, geom: Any, cands: Se
 
 
 def cmd_sensor_study(args: argparse.Namespace) -> int:
-    from kinegym.envs.draw import line_chart, save_rgb
+    from kinegym.envs.charts import line_chart
+    from kinegym.envs.draw import save_rgb
     from kinegym.kinematics.sensor_study import sensor_study
     from kinegym.progress import Progress
 

@@ -54,7 +54,8 @@ def _step(arm: str, joint: int, deg: float, gains: Any = None, duration: float =
 
 
 def cmd_step(args: argparse.Namespace) -> int:
-    from kinegym.envs.draw import line_chart, save_rgb
+    from kinegym.envs.charts import line_chart
+    from kinegym.envs.draw import save_rgb
 
     j = _joint(args.joint)
     if not (math.isfinite(args.deg) and args.deg != 0 and abs(args.deg) <= 180):

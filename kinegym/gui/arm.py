@@ -153,7 +153,7 @@ class ArmApp:
             self._plot_age = 1.0
 
     def _plot(self) -> np.ndarray:
-        from kinegym.envs.draw import line_chart
+        from kinegym.envs.draw import live_chart
 
         if self.run is None or self.run.i < 2:
             return np.full((480, 690, 3), 255, np.uint8)
@@ -164,12 +164,11 @@ class ArmApp:
         t = rec.t[k0::step]
         panels = []
         for ax, name in ((0, "x"), (1, "y"), (2, "z")):
-            panels.append(line_chart({"desired": (t, rec.desired[k0::step, ax]), "real": (t, rec.tip[k0::step, ax])},
-                                     f"pen {name} (cm)", "t (s)", "cm", size=(345, 160), markers=False))
+            panels.append(live_chart({"desired": (t, rec.desired[k0::step, ax]), "real": (t, rec.tip[k0::step, ax])},
+                                     f"pen {name}", "t (s)", "cm", size=(345, 160)))
         qs = {f"q{j + 1}": (t, np.degrees(rec.q_true[k0::step, j])) for j in range(4)}
         lag = float(np.degrees(np.abs(rec.q_ref[k0:] - rec.q_true[k0:]).max()))
-        panels.append(line_chart(qs, f"joints (deg), max lag {lag:.1f}", "t (s)", "deg", size=(345, 160),
-                                 markers=False))
+        panels.append(live_chart(qs, f"joints, max lag {lag:.1f} deg", "t (s)", "deg", size=(345, 160)))
         grid = np.full((480, 690, 3), 255, np.uint8)
         for i, p in enumerate(panels):
             r, c = divmod(i, 2)
