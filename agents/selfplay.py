@@ -12,7 +12,7 @@ board in memory).
 
 Run it (about 5 minutes on one core)::
 
-    python -m kinegym.agents.selfplay --timesteps 6000 --out runs/selfplay
+    kinegym selfplay --timesteps 6000 --out runs/selfplay
 
 It prints the learner's results against the random player and the thesis's 3-ply player
 before and after training (masked, deterministic) and saves ``selfplay_model.zip``.
@@ -20,16 +20,14 @@ before and after training (masked, deterministic) and saves ``selfplay_model.zip
 
 from __future__ import annotations
 
-import argparse
 import copy
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["FrozenOpponent", "SelfPlayResult", "selfplay", "score", "main"]
+__all__ = ["FrozenOpponent", "SelfPlayResult", "selfplay", "score"]
 
 ENV_ID = "kinegym/TicTacToeDraw3x3-v0"
 FAST = {"draw_physics": False, "erase": False, "camera": "ideal"}  # ideal strokes, a plain camera: speed
@@ -92,8 +90,8 @@ def score(model: Any, opponent: str, games: int, seed: int = 0) -> dict[str, tup
 
 
 def selfplay(timesteps: int = 6_000, seed: int = 0, swap_every: int = 1_000, eval_games: int = 10,
-             out: str | Path | None = None, progress: bool = True) -> SelfPlayResult:
-    """Train by self-play; see the module docstring."""
+             out: str | Path | None = None, progress: Any = None) -> SelfPlayResult:
+    """Train by self-play; see the module docstring. ``progress(n)`` hears of every ``n`` steps."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.vec_env import DummyVecEnv
@@ -121,9 +119,11 @@ def selfplay(timesteps: int = 6_000, seed: int = 0, swap_every: int = 1_000, eva
         def _on_step(self) -> bool:
             if self.num_timesteps % swap_every < vec.num_envs:
                 holder[0].freeze(self.model)
+            if callable(progress):
+                progress(vec.num_envs)
             return True
 
-    model.learn(total_timesteps=timesteps, callback=Swap(), progress_bar=progress)
+    model.learn(total_timesteps=timesteps, callback=Swap())
     after = {**score(model, "random", games, seed + 1), **score(model, "thesis", games, seed + 1)}
     path = None
     if out is not None:
@@ -131,28 +131,3 @@ def selfplay(timesteps: int = 6_000, seed: int = 0, swap_every: int = 1_000, eva
         model.save(path)  # atomic: a temporary file renamed over the target
     vec.close()
     return SelfPlayResult(before, after, path)
-
-
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m kinegym.agents.selfplay", description=__doc__.split("\n\n")[0])
-    p.add_argument("--timesteps", type=int, default=6_000, help="env steps (both sides together)")
-    p.add_argument("--swap-every", type=int, default=1_000, help="steps between refreshes of the frozen opponent")
-    p.add_argument("--eval-games", type=int, default=10, help="games per opponent and side, before and after")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", default="runs/selfplay", help="folder for selfplay_model.zip")
-    args = p.parse_args(argv)
-    try:
-        res = selfplay(args.timesteps, args.seed, args.swap_every, args.eval_games, args.out)
-    except ValueError as err:
-        print(f"selfplay: {err}", file=sys.stderr)
-        return 2
-    print(f"{'opponent':<16} {'before (win/draw/loss)':>24} {'after':>20}")
-    for key in res.before:
-        b, a = res.before[key], res.after[key]
-        print(f"{key:<16} {' / '.join(f'{v:.2f}' for v in b):>24} {' / '.join(f'{v:.2f}' for v in a):>20}")
-    print(f"model: {res.model_path}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

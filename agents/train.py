@@ -78,6 +78,9 @@ __all__ = [
     "policy_env_kwargs",
     "make_env",
     "EnvFactory",
+    "StepHook",
+    "steps_per_second",
+    "estimate_train_s",
 ]
 
 
@@ -198,12 +201,32 @@ def _set_threads(n: int) -> None:
     torch.set_num_threads(int(n))
 
 
+#: ``progress(n)``: called with the env steps taken since the last call (the CLI's bar)
+StepHook = Callable[[int], None]
+
+
+def _step_hook(progress: StepHook | None) -> list[Any]:
+    """A callback that passes the steps taken to ``progress`` (none if it is None)."""
+    if not callable(progress):
+        return []
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Steps(BaseCallback):
+        def _on_step(self) -> bool:
+            progress(self.training_env.num_envs)
+            return True
+
+    return [Steps()]
+
+
 def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, seed: int = 0, n_envs: int | None = None,
-          out: str | Path = "runs", progress: bool = True, overrides: dict[str, Any] | None = None,
+          out: str | Path = "runs", progress: StepHook | None = None, overrides: dict[str, Any] | None = None,
           trial_callback: Any = None, command: Sequence[str] | None = None, minutes: float | None = None,
-          make_env: EnvFactory = make_env) -> Path:
+          make_env: EnvFactory = make_env, verbose: int = 0) -> Path:
     """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring).
-    ``minutes`` stops training after that much wall time (the final model is saved)."""
+    ``minutes`` stops training after that much wall time (the final model is saved);
+    ``progress(n)`` hears of every ``n`` env steps; ``verbose=1`` prints SB3's metrics table
+    after every update (rollout success and lengths, losses, fps)."""
     from kinegym.agents.atomic_save import AtomicMaskablePPO, AtomicVecNormalize
 
     limit = _time_limit(minutes)  # (checks minutes before anything is made)
@@ -226,10 +249,11 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
 
         env = AtomicVecNormalize(env, norm_reward=False)
     try:
-        model = AtomicMaskablePPO(cfg["policy"], env, seed=seed, verbose=0, tensorboard_log=str(run / "tb"),
+        model = AtomicMaskablePPO(cfg["policy"], env, seed=seed, verbose=verbose, tensorboard_log=str(run / "tb"),
                                   device="cpu", **_model_kwargs(cfg))
-        cbs = _callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
-        model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, progress_bar=progress, tb_log_name="run")
+        cbs = (_callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
+               + _step_hook(progress))
+        model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, tb_log_name="run")
         model.save(run / "final_model.zip")
         if cfg["normalize"]:
             env.save(str(run / "vecnormalize.pkl"))
@@ -263,9 +287,9 @@ def _last_checkpoint(run: Path) -> tuple[Path, int]:
     return path, steps
 
 
-def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = True,
+def resume(run_dir: str | Path, timesteps: int | None = None, progress: StepHook | None = None,
            command: Sequence[str] | None = None, minutes: float | None = None,
-           make_env: EnvFactory = make_env) -> Path:
+           make_env: EnvFactory = make_env, verbose: int = 0) -> Path:
     """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
     statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
     (default: the run's ``n_timesteps``)."""
@@ -308,9 +332,10 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: bool = T
         model = load_maskable(ck, env.observation_space, env.action_space, env=env, cls=AtomicMaskablePPO,
                               learning_rate=parse_schedule(cfg["learning_rate"]),
                               clip_range=parse_schedule(cfg["clip_range"]), tensorboard_log=str(run / "tb"))
-        cbs = _callbacks(cfg, run, cfg["n_envs"], make_env) + limit
-        model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, progress_bar=progress,
-                    reset_num_timesteps=False, tb_log_name="run")
+        model.verbose = verbose
+        cbs = _callbacks(cfg, run, cfg["n_envs"], make_env) + limit + _step_hook(progress)
+        model.learn(total_timesteps=total - model.num_timesteps, callback=cbs, reset_num_timesteps=False,
+                    tb_log_name="run")
         model.save(run / "final_model.zip")
         if cfg["normalize"]:
             env.save(str(run / "vecnormalize.pkl"))
@@ -382,6 +407,43 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
     img = line_chart(series, "HoleClimb-v0: MaskablePPO learning curve", "env steps", "success rate",
                      size=(820, 420), ylim=(0.0, 1.02), markers=False)
     return save_rgb(img, run / "learning_curve.png")
+
+
+# ------------------------------------------------------------------ costs, announced before long work
+#: a rough episode length for estimates (the planner needs 20-60 moves; a stuck policy uses all 200)
+TYPICAL_EPISODE = 100
+
+
+def steps_per_second(env_kwargs: dict[str, Any], steps: int = 40, make_env: EnvFactory = make_env) -> float:
+    """This machine's env steps per second for ``env_kwargs`` (masked random moves on one env,
+    fresh walls): what the estimates of long commands scale from."""
+    kw = {k: v for k, v in env_kwargs.items() if k not in _POOL_KEYS}
+    env = make_env(**kw)
+    rng = np.random.default_rng(0)
+    try:
+        env.reset(seed=VALIDATION_SEED)
+        t0, n = time.perf_counter(), 0
+        while n < steps:
+            mask = env.get_wrapper_attr("action_masks")()
+            _, _, term, trunc, _ = env.step(int(rng.choice(np.flatnonzero(mask))) if mask.any() else 0)
+            n += 1
+            if term or trunc:
+                env.reset()
+        return n / max(time.perf_counter() - t0, 1e-9)
+    finally:
+        env.close()
+
+
+def estimate_train_s(cfg: dict[str, Any], sps: float, timesteps: int | None = None) -> float:
+    """Rough seconds to train ``cfg`` (``timesteps`` or its own): the env steps on the envs
+    that run in parallel, the policy and PPO's updates (measured: about 1.5x the env time on top),
+    the validation evaluations."""
+    import os
+
+    steps = cfg["n_timesteps"] if timesteps is None else timesteps
+    parallel = max(1, min(cfg["n_envs"], os.cpu_count() or 1))
+    evals = steps // max(cfg["eval_freq"], 1)
+    return 2.5 * steps / (sps * parallel) + evals * cfg["eval_episodes"] * TYPICAL_EPISODE / sps
 
 
 # ------------------------------------------------------------------ evaluation

@@ -12,6 +12,7 @@ and the study goes on.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -75,10 +76,15 @@ def _check_storage_file(url: str, path: Path, magic: bytes, kind: str) -> None:
 
 
 def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config: str | Path = DEFAULT_CONFIG,
-         out: str | Path = "runs/tune", seed: int = 0, progress: bool = False,
-         make_env: EnvFactory = make_env) -> dict[str, Any]:
+         out: str | Path = "runs/tune", seed: int = 0, progress: Any = None,
+         make_env: EnvFactory = make_env, eval_episodes: int | None = None, n_envs: int | None = None,
+         on_trial: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
     """Run ``trials`` Optuna trials of the study ``study`` in ``storage`` (created if missing);
-    several processes or machines may run this at once on one storage. Returns a summary."""
+    several processes or machines may run this at once on one storage. Returns a summary.
+
+    Each trial trains ``timesteps`` env steps on ``n_envs`` envs (default: the config's) and is
+    judged by 4 evaluations of ``eval_episodes`` validation walls each (default: the config's).
+    ``on_trial(summary)`` hears of every finished trial: number, state, value, params, seconds."""
     import optuna
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -112,7 +118,9 @@ def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config:
             "policy_kwargs": {"net_arch": [trial.suggest_categorical("width", [64, 128, 256])] * 2},
         }
         cb = Report(trial)
-        run = train(config, timesteps, seed + trial.number, out=out, progress=progress,
+        if eval_episodes is not None:
+            over["eval_episodes"] = int(eval_episodes)
+        run = train(config, timesteps, seed + trial.number, n_envs=n_envs, out=out, progress=progress,
                     overrides={**over, "eval_freq": max(64, timesteps // 4)}, trial_callback=cb,
                     command=["kinegym", "tune", "gait", f"trial {trial.number} of study {study}"], make_env=make_env)
         trial.set_user_attr("run", str(run))
@@ -122,7 +130,13 @@ def tune(trials: int, storage: str, study: str, timesteps: int = 50_000, config:
             raise RuntimeError(f"trial {trial.number}: no evaluation ran in {timesteps} steps; raise --timesteps")
         return float(trial.user_attrs["last_value"])
 
-    s.optimize(objective, n_trials=trials)
+    def summary(study_: Any, t: Any) -> None:
+        if on_trial is not None:
+            secs = (t.datetime_complete - t.datetime_start).total_seconds() if t.datetime_complete else None
+            on_trial({"number": t.number, "state": t.state.name.lower(), "value": t.value if t.value is not None
+                      else t.user_attrs.get("last_value"), "params": t.params, "seconds": secs})
+
+    s.optimize(objective, n_trials=trials, callbacks=[summary])
     done = [t for t in s.trials if t.state == optuna.trial.TrialState.COMPLETE]
     best = s.best_trial if done else None
     return {"study": study, "storage": storage, "trials": len(s.trials), "complete": len(done),

@@ -7,6 +7,7 @@ what to install, instead of a bare ``ModuleNotFoundError`` from deep inside ``re
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,7 @@ class Window:
 
     def show(self, frame: np.ndarray) -> None:
         """Blit an (H, W, 3) uint8 frame, pump events and wait for the frame rate."""
+        os.environ.setdefault("SDL_AUDIODRIVER", "dummy")  # video only: no ALSA errors on machines without sound
         try:
             import pygame
         except ImportError as exc:
@@ -31,7 +33,7 @@ class Window:
                 'render_mode="human" needs pygame: pip install "kinegym[human]" '
                 '(or use render_mode="rgb_array", which needs no display)') from exc
         if self._screen is None:
-            pygame.init()
+            pygame.display.init()  # not pygame.init(): no mixer, no audio device
             self._screen = pygame.display.set_mode(frame.shape[1::-1])
             pygame.display.set_caption(self.caption)
             self._clock = pygame.time.Clock()

@@ -54,7 +54,9 @@ class Progress:
         eta = elapsed / frac - elapsed if frac > 0 else 0.0
         width = 28
         bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
-        line = f"{self.desc} [{bar}] {self.done}/{self.total} {elapsed:5.1f}s" + ("" if final else f" eta {eta:4.0f}s")
+        line = f"{self.desc} [{bar}] {self.done}/{self.total} {elapsed:5.1f}s"
+        if not final and frac >= 0.05:  # an eta from the first few steps would be noise
+            line += f" eta {eta:4.0f}s"
         if self._tty:
             self.stream.write("\r" + line)
         else:

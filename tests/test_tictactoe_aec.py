@@ -107,7 +107,7 @@ def test_the_single_agent_env_is_the_arms_side_of_the_aec() -> None:
 def test_selfplay_trains_against_its_frozen_self(tmp_path) -> None:  # noqa: ANN001
     from kinegym.agents.selfplay import FrozenOpponent, selfplay
 
-    res = selfplay(timesteps=256, swap_every=128, eval_games=1, out=tmp_path, progress=False)
+    res = selfplay(timesteps=256, swap_every=128, eval_games=1, out=tmp_path)
     assert res.model_path is not None and res.model_path.is_file()
     assert set(res.before) == set(res.after) == {"random as X", "random as O", "thesis as X", "thesis as O"}
     assert all(abs(sum(v) - 1.0) < 1e-9 for v in res.after.values())

@@ -154,3 +154,28 @@ def test_a_run_killed_at_random_moments_resumes_cleanly() -> None:
     assert r.returncode == 0, r.stderr[-2000:]
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     assert summary["points"] == 2 and summary["clean"] == 2 and summary["damaged_files"] == 0, summary
+
+
+def test_long_commands_announce_their_cost_and_report_per_trial(tmp_path: Path) -> None:
+    """tune says what a trial costs before the first, takes --eval-episodes / --n-envs, and
+    prints one line per finished trial; train --verbose prints SB3's metrics and names only
+    files it wrote."""
+    cfg = small_config(tmp_path, n_envs=2, eval_episodes=5)
+    base = [sys.executable, "-m", "kinegym"]
+    tune = subprocess.run([*base, "tune", "gait", "--trials", "1", "--storage", f"journal:{tmp_path / 's.log'}",
+                           "--study", "c", "--timesteps", "256", "--config", str(cfg), "--out", str(tmp_path / "t"),
+                           "--eval-episodes", "1", "--n-envs", "1"], capture_output=True, text=True, timeout=600,
+                          cwd=tmp_path)
+    assert tune.returncode == 0, tune.stderr[-2000:]
+    assert "1 trials x (256 env steps on 1 envs + 4 evaluations of 1 walls): about" in tune.stderr
+    assert "trial 0: complete, validation success" in tune.stderr or "trial 0: pruned" in tune.stderr
+    train = subprocess.run([*base, "train", "gait", "--timesteps", "512", "--n-envs", "1", "--config", str(cfg),
+                            "--out", str(tmp_path / "runs"), "--verbose"], capture_output=True, text=True,
+                           timeout=600, cwd=tmp_path)
+    assert train.returncode == 0, train.stderr[-2000:]
+    assert "train: 512 env steps on 1 envs" in train.stderr and "env steps/s measured" in train.stderr
+    assert "total_timesteps" in train.stdout  # SB3's table
+    run = tmp_path / next(ln for ln in train.stdout.splitlines() if ln.startswith("run directory:")).split(": ")[1]
+    for word in train.stdout.split():
+        if word.endswith(".zip"):
+            assert (tmp_path / word).is_file() or (run / word).is_file(), f"train names {word}, not written"

@@ -9,36 +9,80 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit
+from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit, out_dir
 
 __all__ = ["add_parsers"]
 
 
-def cmd_train(args: argparse.Namespace) -> int:
+def _minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
+
+
+def _say(args: argparse.Namespace, text: str) -> None:
+    """A line about the cost of what follows (stderr, so --json output stays one document)."""
+    if not args.json:
+        print(text, file=sys.stderr, flush=True)
+
+
+def _evaluate_cost(policy_kwargs: dict[str, Any], episodes: int, modes: tuple[str, ...]) -> tuple[float, str]:
+    """Rough seconds for ``evaluate`` (both agents, every mode) and how it was measured."""
     from kinegym.agents import train as T
 
-    progress = not args.json and not args.no_progress
+    total, parts = 0.0, []
+    for mode in modes:
+        sps = T.steps_per_second({**policy_kwargs, "mode": mode}, steps=12 if mode == "physics" else 40)
+        total += 2 * episodes * T.TYPICAL_EPISODE / sps
+        parts.append(f"{mode} {sps:.0f} steps/s")
+    return total, ", ".join(parts)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from kinegym.agents import train as T
+    from kinegym.progress import Progress
+
+    show = not args.json and not args.no_progress
     if args.minutes is not None and not args.minutes > 0:
         raise UsageError(f"--minutes {args.minutes}; expected > 0")
+    verbose = 1 if args.verbose else 0
     if args.resume:
         if not Path(args.resume).is_dir():
             raise UsageError(f"--resume {args.resume!r} is not a run directory")
-        run = T.resume(args.resume, args.timesteps, progress=progress, command=["kinegym", *sys.argv[1:]],
-                       minutes=args.minutes)
+        with Progress(args.timesteps or 1, "train (resumed)", enabled=show and bool(args.timesteps)) as bar:
+            run = T.resume(args.resume, args.timesteps, progress=bar.update, command=["kinegym", *sys.argv[1:]],
+                           minutes=args.minutes, verbose=verbose)
     else:
         if args.timesteps is not None and args.timesteps < 1:
             raise UsageError(f"--timesteps {args.timesteps}; expected >= 1")
         if args.n_envs is not None and not 1 <= args.n_envs <= 64:
             raise UsageError(f"--n-envs {args.n_envs}; expected 1..64")
-        run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=progress,
-                      command=["kinegym", *sys.argv[1:]], minutes=args.minutes)
+        cfg = T.load_train_config(args.config)
+        if args.n_envs is not None:
+            cfg["n_envs"] = args.n_envs
+        steps = args.timesteps or cfg["n_timesteps"]
+        if not args.json:
+            sps = T.steps_per_second(cfg["env_kwargs"])
+            est = T.estimate_train_s(cfg, sps, steps)
+            limit = f", stopped at {args.minutes:g} min (--minutes)" if args.minutes else ""
+            _say(args, f"train: {steps:,} env steps on {cfg['n_envs']} envs, an evaluation of "
+                       f"{cfg['eval_episodes']} walls every {cfg['eval_freq']:,} steps: about "
+                       f"{_minutes(est)} here ({sps:.0f} env steps/s measured){limit}")
+        with Progress(steps, "train", enabled=show) as bar:
+            run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=bar.update,
+                          command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose)
     files = sorted(str(p.relative_to(run)) for p in run.rglob("*") if p.is_file() and "tb" not in p.parts)
     lines = [f"run directory: {run}"] + [f"  {f}" for f in files if not f.startswith("monitor/")]
     curve = run / "learning_curve.png"
     if curve.is_file():
         lines.append(f"learning curve: {curve}")
-    lines.append(f"evaluate it: kinegym evaluate gait --policy {run / 'final_model.zip'}"
-                 f"  (the best on validation walls: {run / 'best' / 'best_model.zip'})")
+    best = run / "best" / "best_model.zip"
+    final = run / "final_model.zip"
+    policy = final if final.is_file() else best
+    if policy.is_file():
+        quick = f"kinegym evaluate gait --policy {policy} --mode kinematic --episodes 20"
+        lines.append(f"evaluate it: {quick}  (kinematic walls only; --mode both --episodes 50 adds physics, "
+                     "which takes minutes to tens of minutes: it says how long before it starts)")
+        if best.is_file() and policy != best:
+            lines.append(f"the best on validation walls: {best}")
     emit(args, {"run": str(run), "files": files}, "\n".join(lines))
     return EXIT_OK
 
@@ -52,6 +96,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.episodes < 1:
         raise UsageError(f"--episodes {args.episodes}; expected >= 1")
     modes = ("kinematic", "physics") if args.mode == "both" else (args.mode,)
+    if not args.json:
+        from kinegym.agents.policies import policy_env_kwargs
+
+        est, how = _evaluate_cost(policy_env_kwargs(args.policy), args.episodes, modes)
+        _say(args, f"evaluate: {args.episodes} walls x {len(modes)} mode(s) x 2 agents: about {_minutes(est)} here "
+                   f"({how}; --mode kinematic and fewer --episodes are quicker)")
     with Progress(args.episodes * len(modes), "evaluate (policy and planner on the same walls)",
                   enabled=not args.json) as bar:
         rows = T.evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update)
@@ -78,14 +128,60 @@ def cmd_tune(args: argparse.Namespace) -> int:
         raise UsageError(f"--trials {args.trials}; expected >= 1")
     if not 64 <= args.timesteps <= 10**9:
         raise UsageError(f"--timesteps {args.timesteps}; expected 64..1e9 env steps per trial")
+    if args.eval_episodes is not None and not 1 <= args.eval_episodes <= 10_000:
+        raise UsageError(f"--eval-episodes {args.eval_episodes}; expected 1..10000 walls per evaluation")
+    if args.n_envs is not None and not 1 <= args.n_envs <= 64:
+        raise UsageError(f"--n-envs {args.n_envs}; expected 1..64")
     from kinegym.agents.tune import open_storage, tune
 
-    T.load_train_config(args.config)  # a bad config is named before any trial starts (not inside one)
+    cfg = T.load_train_config(args.config)  # a bad config is named before any trial starts (not inside one)
     open_storage(args.storage)  # so is a bad storage
-    res = tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed)
+    cfg.update({k: v for k, v in (("eval_episodes", args.eval_episodes), ("n_envs", args.n_envs)) if v is not None})
+    cfg["eval_freq"] = max(64, args.timesteps // 4)
+    if not args.json:
+        sps = T.steps_per_second(cfg["env_kwargs"])
+        per = T.estimate_train_s(cfg, sps, args.timesteps)
+        _say(args, f"tune: {args.trials} trials x ({args.timesteps:,} env steps on {cfg['n_envs']} envs + 4 "
+                   f"evaluations of {cfg['eval_episodes']} walls): about {_minutes(per)} a trial, "
+                   f"{_minutes(per * args.trials)} in all here ({sps:.0f} env steps/s; pruned trials stop early; "
+                   "--eval-episodes and --timesteps lower it)")
+
+    def on_trial(t: dict[str, Any]) -> None:
+        value = "-" if t["value"] is None else f"{t['value']:.3f}"
+        secs = "" if t["seconds"] is None else f" in {t['seconds']:.0f} s"
+        params = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in t["params"].items())
+        _say(args, f"trial {t['number']}: {t['state']}, validation success {value}{secs} ({params})")
+
+    res = tune(args.trials, args.storage, args.study, args.timesteps, args.config, args.out, args.seed,
+               eval_episodes=args.eval_episodes, n_envs=args.n_envs, on_trial=on_trial)
     lines = [f"study {res['study']} on {res['storage']}: {res['trials']} trials ({res['complete']} complete, "
              f"{res['pruned']} pruned)", f"best validation success {res['best_value']}, params {res['best_params']}"]
     emit(args, res, "\n".join(lines))
+    return EXIT_OK
+
+
+def cmd_selfplay(args: argparse.Namespace) -> int:
+    from kinegym.agents.selfplay import selfplay
+    from kinegym.progress import Progress
+
+    if not 1 <= args.timesteps <= 10_000_000:
+        raise UsageError(f"--timesteps {args.timesteps}; expected 1..10000000")
+    if not 1 <= args.eval_games <= 10_000:
+        raise UsageError(f"--eval-games {args.eval_games}; expected 1..10000")
+    if args.swap_every < 1:
+        raise UsageError(f"--swap-every {args.swap_every}; expected >= 1")
+    games = 2 * 2 * 2 * args.eval_games  # before and after, two opponents, two sides
+    _say(args, f"selfplay: {args.timesteps:,} steps of the drawn 3x3 game and {games} evaluation games: about "
+               f"{_minutes(0.05 * (args.timesteps + 4 * games))} (the camera and the reader cost ~45 ms a step)")
+    with Progress(args.timesteps, "selfplay", enabled=not args.json) as bar:
+        res = selfplay(args.timesteps, args.seed, args.swap_every, args.eval_games, out_dir(args.out),
+                       progress=bar.update)
+    lines = [f"{'opponent':<16} {'before (win/draw/loss)':>24} {'after':>20}"]
+    for key in res.before:
+        b, a = res.before[key], res.after[key]
+        lines.append(f"{key:<16} {' / '.join(f'{v:.2f}' for v in b):>24} {' / '.join(f'{v:.2f}' for v in a):>20}")
+    lines.append(f"model: {res.model_path}")
+    emit(args, {"before": res.before, "after": res.after, "model": str(res.model_path)}, "\n".join(lines))
     return EXIT_OK
 
 
@@ -101,6 +197,8 @@ def add_parsers(sub: Any) -> None:
     tr.add_argument("--minutes", type=float, default=None,
                     help="stop after this much wall time (final model saved; default: no limit)")
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
+    tr.add_argument("--verbose", action="store_true",
+                    help="print SB3's training metrics after every update (success, episode length, losses, fps)")
     add_json(tr)
     tr.set_defaults(func=cmd_train)
 
@@ -120,8 +218,20 @@ def add_parsers(sub: Any) -> None:
                     help="sqlite:///study.db, postgresql://user:pw@host/db, or journal:/shared/path/study.log")
     tu.add_argument("--study", required=True, help="study name (workers with the same name cooperate)")
     tu.add_argument("--timesteps", type=int, default=50_000, help="env steps per trial")
+    tu.add_argument("--eval-episodes", type=int, default=None,
+                    help="validation walls per evaluation, 4 evaluations a trial (default: the config's)")
+    tu.add_argument("--n-envs", type=int, default=None, help="parallel envs per trial (default: the config's)")
     tu.add_argument("--config", default="hole_climb_maskable_ppo")
     tu.add_argument("--out", default="runs/tune")
     tu.add_argument("--seed", type=int, default=0)
     add_json(tu)
     tu.set_defaults(func=cmd_tune)
+
+    sp = sub.add_parser("selfplay", help="MaskablePPO learns the drawn 3x3 game against its frozen self")
+    sp.add_argument("--timesteps", type=int, default=6_000, help="env steps (both sides together)")
+    sp.add_argument("--swap-every", type=int, default=1_000, help="steps between refreshes of the frozen opponent")
+    sp.add_argument("--eval-games", type=int, default=10, help="games per opponent and side, before and after")
+    sp.add_argument("--seed", type=int, default=0)
+    sp.add_argument("--out", default="runs/selfplay", help="folder for selfplay_model.zip")
+    add_json(sp)
+    sp.set_defaults(func=cmd_selfplay)
