@@ -145,9 +145,9 @@ def nice_ticks(lo: float, hi: float, n: int = 5) -> list[float]:
         return [lo]
     raw = span / max(1, n)
     mag = 10.0 ** np.floor(np.log10(raw))
-    step = next(m * mag for m in (1, 2, 5, 10) if m * mag >= raw)
+    step = min((m * mag for m in (1, 2, 5, 10)), key=lambda st: abs(span / st - n))
     first = np.ceil(lo / step - 1e-9) * step
-    return [float(round(v, 12)) for v in np.arange(first, hi + step * 1e-9, step)]
+    return [float(round(v, 12)) + 0.0 for v in np.arange(first, hi + step * 1e-9, step)]
 
 
 def live_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
@@ -213,28 +213,65 @@ def save_rgb(img: np.ndarray, path: str | Path) -> Path:
     return write_image(img, path)
 
 
-def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
-    """Write RGB frames as an animated GIF (Pillow), same-size frames padded if needed."""
-    import io
-
-    from PIL import Image
-
-    out = Path(path)
-    if out.suffix.lower() != ".gif":
-        raise FileError(out, f"extension {out.suffix or '(none)'!r}", "a GIF path ending in .gif")
-    if not frames:
-        raise ValueError("save_gif needs at least one frame")
+def _same_size(frames: list[np.ndarray], even: bool = False) -> list[np.ndarray]:
     h = max(f.shape[0] for f in frames)
     w = max(f.shape[1] for f in frames)
-    imgs = []
+    if even:  # H.264 wants even sides
+        h, w = h + h % 2, w + w % 2
+    out = []
     for f in frames:
         canvas = np.full((h, w, 3), 255, np.uint8)
         canvas[: f.shape[0], : f.shape[1]] = f
-        imgs.append(Image.fromarray(canvas).convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
+        out.append(canvas)
+    return out
+
+
+def save_gif(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
+    """Write RGB frames as an animation: ``.gif`` (Pillow) or ``.mp4`` (H.264 through
+    imageio-ffmpeg, the ``video`` extra: ``pip install "kinegym[video]"``); frames of
+    different sizes are padded to the largest."""
+    import io
+
+    out = Path(path)
+    ext = out.suffix.lower()
+    if ext not in (".gif", ".mp4"):
+        raise FileError(out, f"extension {out.suffix or '(none)'!r}", "an animation path ending in .gif or .mp4")
+    if not frames:
+        raise ValueError("save_gif needs at least one frame")
+    if ext == ".mp4":
+        return _save_mp4(_same_size(frames, even=True), out, fps)
+    from PIL import Image
+
+    imgs = [Image.fromarray(f).convert("P", palette=Image.Palette.ADAPTIVE, colors=128) for f in _same_size(frames)]
     buf = io.BytesIO()
     imgs[0].save(buf, format="GIF", save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0,
                  optimize=False)
     return write_atomic(out, buf.getvalue(), (".gif",), "GIF")
+
+
+def _save_mp4(frames: list[np.ndarray], out: Path, fps: float) -> Path:
+    import os
+    import tempfile
+
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise FileError(out, "an .mp4 needs imageio-ffmpeg, which is not installed",
+                        'pip install "kinegym[video]", or a .gif path') from None
+    h, w = frames[0].shape[:2]
+    fd, tmp = tempfile.mkstemp(suffix=".mp4")  # encoded aside, then written atomically where asked
+    os.close(fd)
+    try:
+        writer = imageio_ffmpeg.write_frames(tmp, (w, h), fps=float(fps), codec="libx264", pix_fmt_out="yuv420p",
+                                             macro_block_size=1, ffmpeg_log_level="error")
+        writer.send(None)
+        for f in frames:
+            writer.send(np.ascontiguousarray(f))
+        writer.close()
+        data = Path(tmp).read_bytes()
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    return write_atomic(out, data, (".mp4",), "MP4 video")
 
 
 def draw_climb(holes: HoleMap, goal: int, pose: object, q: object, geom: ClimberGeometry, estimate: object,

@@ -178,7 +178,7 @@ def add_parsers(sub: Any) -> None:
     dr.add_argument("--homing", action="store_true", help="power on with unknown encoder offsets and home first")
     dr.add_argument("--seed", type=int, default=0, help="seed of the power-on pose (with --homing)")
     dr.add_argument("--out", default="kinegym-out", help="folder for the PNGs")
-    dr.add_argument("--gif", default=None, help="write a GIF of the drawing")
+    dr.add_argument("--gif", default=None, help="write the drawing as an animation (.gif, or .mp4 with kinegym[video])")
     add_json(dr)
     dr.set_defaults(func=cmd_draw)
 

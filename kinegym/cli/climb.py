@@ -95,6 +95,6 @@ def add_parsers(sub: Any) -> None:
     cl.add_argument("--mode", default="kinematic", choices=("kinematic", "physics"))
     cl.add_argument("--episodes", type=int, default=5)
     cl.add_argument("--seed", type=int, default=0, help="seed of the first episode (then +1 per episode)")
-    cl.add_argument("--gif", default=None, help="write a GIF of the first episode")
+    cl.add_argument("--gif", default=None, help="animate the first episode (.gif, or .mp4 with kinegym[video])")
     add_json(cl)
     cl.set_defaults(func=cmd_climb)

@@ -153,6 +153,6 @@ def add_parsers(sub: Any) -> None:
     fo.add_argument("--max-steps", type=int, default=1000, help="steps in all (the seed: 1000)")
     fo.add_argument("--seed", type=int, default=0, help="noise seed")
     fo.add_argument("--out", default="kinegym-out", help="folder for the pictures")
-    fo.add_argument("--gif", default=None, help="write the run as a GIF here")
+    fo.add_argument("--gif", default=None, help="animate the run (.gif, or .mp4 with kinegym[video])")
     add_json(fo)
     fo.set_defaults(func=cmd_follow)
