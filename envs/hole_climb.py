@@ -105,6 +105,13 @@ climb it with this gait).
 tasks (wall, start, goal), task ``i`` made once from the seed ``(wall_pool_seed, i)``; a task
 keeps its route check and its move judgements between episodes, which makes resets free and
 steps about twice as fast. Evaluate on fresh walls (``wall_pool=0``).
+
+## Version History
+
+* v0 (kinegym 0.1): the first release. Within v0, before 1.0: the observation variants
+  became their own ids (``kinegym/HoleClimbMemory-v0``, ``kinegym/HoleClimbMemoryHints-v0``;
+  ``memory``/``hints`` are no longer ``gymnasium.make`` arguments of this id), and
+  ``action_masks()`` before ``reset()`` raises ``ResetNeededError``.
 """
 
 from __future__ import annotations

@@ -71,6 +71,10 @@ render_mode=None)``; ``board`` is 3 or 5 (``k`` in a row: 3 on 3 x 3, 4 on 5 x 5
 
 Determinism: hand marks and camera samples draw from the env's generator, seeded by
 ``reset(seed=...)``; the same seed and actions give the same observations, bit for bit.
+
+## Version History
+
+* v0 (kinegym 0.1): the first release (``metadata["name"] = "kinegym_tictactoe_draw_v0"``).
 """
 
 from __future__ import annotations

@@ -92,6 +92,14 @@ games replay bit for bit).
 Determinism: everything random (opponent, hand-drawn marks, camera) draws from
 ``self.np_random``; the same seed and the same actions give the same observations, bit for
 bit. Pickling replays the episode from its seed (pymunk states do not copy exactly).
+
+## Version History
+
+* v0 (kinegym 0.1): the first release. Within v0, before 1.0: ``board`` and ``obs_mode``
+  variants became their own ids (``kinegym/TicTacToeDraw3x3-v0``, ``...Image-v0``,
+  ``...BoardImage-v0``), the env became the arm's side of the AEC env
+  (:mod:`kinegym.envs.tictactoe_aec`), and ``action_masks()`` before ``reset()`` raises
+  ``ResetNeededError``.
 """
 
 from __future__ import annotations

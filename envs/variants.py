@@ -2,7 +2,7 @@
 
 Gymnasium's rule: an id's spaces never change. So every keyword argument that changes an
 observation or action space is fixed by the id, and a variant with another space is its own
-id (as ``LunarLander-v3`` and ``LunarLanderContinuous``):
+id (as Gymnasium registers ``FrozenLake-v1`` and ``FrozenLake8x8-v1``):
 
 | id | fixed keyword arguments | observation | action |
 |---|---|---|---|
