@@ -45,7 +45,8 @@ def _config(folder: Path) -> Path:
     from kinegym.configs import CONFIG_DIR
 
     base = yaml.safe_load((CONFIG_DIR / "train" / f"{T.DEFAULT_CONFIG}.yaml").read_text())
-    base[T.ENV_ID].update(SMALL)
+    (section,) = base.values()  # the one section, whichever id it is written for
+    section.update(SMALL)
     p = folder / "small.yaml"
     p.write_text(yaml.safe_dump(base))
     return p
