@@ -83,12 +83,11 @@ def zoo_scope() -> Iterator[dict[str, Any]]:
 
         def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                     deterministic: bool = False, action_masks: Any = None) -> Any:
-            env = _state["env"]
+            env = state["env"]
             if action_masks is None and env is not None and is_masking_supported(env):
                 action_masks = get_action_masks(env)
             return super().predict(observation, state, episode_start, deterministic, action_masks)
 
-    _state = state
     ZooMaskablePPO.__name__ = ZooMaskablePPO.__qualname__ = "MaskablePPO"
     patches = [(rl_zoo3.utils.ALGOS, "ppo_mask", ZooMaskablePPO, True),
                (rl_zoo3.exp_manager, "EvalCallback", MaskableEvalCallback, False),
