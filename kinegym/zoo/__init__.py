@@ -71,19 +71,19 @@ def zoo_scope() -> Iterator[dict[str, Any]]:
     from sb3_contrib.common.maskable.callbacks import MaskableEvalCallback
     from sb3_contrib.common.maskable.utils import get_action_masks, is_masking_supported
 
-    state: dict[str, Any] = {"env": None}
+    scope: dict[str, Any] = {"env": None}
     original = rl_zoo3.utils.create_test_env
 
     def create_test_env(*args: Any, **kwargs: Any) -> Any:
-        state["env"] = original(*args, **kwargs)
-        return state["env"]
+        scope["env"] = original(*args, **kwargs)
+        return scope["env"]
 
     class ZooMaskablePPO(MaskablePPO):
         """MaskablePPO whose ``predict`` asks the env Zoo made for the masks it was not given."""
 
         def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                     deterministic: bool = False, action_masks: Any = None) -> Any:
-            env = state["env"]
+            env = scope["env"]  # (predict's own "state" is the recurrent one)
             if action_masks is None and env is not None and is_masking_supported(env):
                 action_masks = get_action_masks(env)
             return super().predict(observation, state, episode_start, deterministic, action_masks)
@@ -101,7 +101,7 @@ def zoo_scope() -> Iterator[dict[str, Any]]:
         else:
             setattr(target, name, value)
     try:
-        yield state
+        yield scope
     finally:
         for (target, name, _, is_dict), old in zip(patches, saved):
             if is_dict:
