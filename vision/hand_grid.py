@@ -1,0 +1,431 @@
+"""Finding a hand-drawn '#' grid: wavy, converging, unframed lines traced as curves, and the
+grid chosen as the set of long strokes that cross each other the way a tic-tac-toe grid does.
+
+Steps (all on one working copy of the ink map, about :data:`GRID_SIDE_PX` on its longer side,
+so that every photo from 500 to 4,000 px is processed at the same scale):
+
+1. **Ink mask, adaptive.** A pixel is ink when it is darker than its background by more
+   than the image's own noise (a robust spread of the darkness over the whole image, which
+   is mostly paper) and than a share of its strongest strokes: pale ballpoint and light
+   marker next to nothing darker are kept, paper texture is not. The stroke width is
+   measured from the mask (median run across strokes).
+2. **The two directions.** A structure-tensor orientation histogram of the ink, weighted
+   by how line-like each neighbourhood is; the strongest peak is one family, the strongest
+   peak 40-90 deg away the other. (Not "the longest line": long X strokes at 45 deg or a
+   page edge do not seed it.)
+3. **Tracks.** The ink is turned so that a family runs vertically and cut into bands
+   across it; in each band a stroke of that family is a peak of the ink summed along the
+   band (strokes of the other family spread flat). Peaks are linked from band to band,
+   allowing drift (perspective, waves) and gaps (faint or broken pen): a track is a
+   polyline that may bend.
+4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
+   pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
+   in size, and each line should run on past its outer crossings (the outer cells). The
+   score favours long, strongly inked, regular '#'s with arms; the best wins. A frame line
+   is never chosen as an interior one: the other lines stop at it, so it has no arms.
+
+The result is the lattice of the crossings (a homography, cells of the '#' at 1..n-1) and the
+chosen tracks, which the reader erases from the ink before reading the cells.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .errors import NoBoardError
+
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid"]
+
+#: The longer side of the working copy the grid is searched on (px).
+GRID_SIDE_PX = 480
+_BANDS = 18  # bands across a family (each about a 1/18 of the image)
+
+
+@dataclass
+class Track:
+    """One traced stroke of a family: ``pts`` ``(K, 2)`` image px along it, one per band it
+    shows in, ``strength`` the mean ink of its peaks relative to a straight stroke of the
+    measured width, ``bands`` the number of bands with ink."""
+
+    pts: np.ndarray
+    strength: float
+    bands: int
+
+    @property
+    def span(self) -> float:
+        """End-to-end distance (px): a track that zigzags between strokes gains nothing."""
+        return float(np.hypot(*(self.pts[-1] - self.pts[0])))
+
+    @property
+    def length(self) -> float:
+        return float(np.hypot(*np.diff(self.pts, axis=0).T).sum()) if len(self.pts) > 1 else 0.0
+
+
+@dataclass
+class HashGrid:
+    """A '#' found: ``H`` takes lattice coordinates (the '#' lines at 1..n-1) to working px;
+    ``cols``/``rows`` the chosen tracks (left to right, top to bottom), ``crossings``
+    ``(n-1, n-1, 2)`` px [col, row], ``stroke_px`` the measured pen width, ``threshold`` the
+    ink mask's level, ``score`` the hypothesis's score."""
+
+    n: int
+    H: np.ndarray
+    cols: list[Track]
+    rows: list[Track]
+    crossings: np.ndarray
+    stroke_px: float
+    threshold: float
+    score: float
+    error_px: float
+
+
+def ink_mask(d: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The ink mask of a darkness map (uint8 0/1), its threshold and the stroke width (px).
+
+    The threshold is the larger of the map's noise level (median + 6 robust sigmas) and 22 %
+    of its strong ink (the 99.7th percentile); a pixel joins the mask also at 60 % of that
+    level when it touches a pixel above it (hysteresis: a faint stretch of a line stays
+    connected)."""
+    sample = d[::2, ::2].ravel()
+    med = float(np.median(sample))
+    mad = float(np.median(np.abs(sample - med))) * 1.4826
+    top = float(np.percentile(sample, 99.7))
+    t = max(med + 6.0 * mad, 0.22 * top, 0.035)
+    hi = (d > t).astype(np.uint8)
+    lo = (d > 0.6 * t).astype(np.uint8)
+    # hysteresis: low pixels within a pixel of high ones
+    mask = cv2.bitwise_and(lo, cv2.dilate(hi, np.ones((3, 3), np.uint8)))
+    return mask, t, _stroke_width(mask)
+
+
+def _stroke_width(mask: np.ndarray) -> float:
+    """Median length of the mask's runs along rows and columns, the shorter of the two
+    medians (a run across a stroke is its width; one along it is long)."""
+    widths = []
+    for m in (mask, mask.T):
+        pad = np.pad(m, ((0, 0), (1, 1))).astype(np.int8)
+        diff = np.diff(pad, axis=1)
+        starts, ends = np.nonzero(diff == 1), np.nonzero(diff == -1)
+        runs = ends[1] - starts[1]
+        runs = runs[runs > 0]
+        if len(runs):
+            widths.append(float(np.median(runs)))
+    return max(1.0, min(widths)) if widths else 2.0
+
+
+def _directions(mask: np.ndarray, width: float) -> tuple[float, float]:
+    """The two families' line directions (rad, 0..pi): the angles at which the ink's
+    projection is most peaked (sum of squared counts in stroke-wide bins, a Radon energy that
+    long strokes dominate: length counts squared), the second at least 40 deg from the first."""
+    ys, xs = np.nonzero(mask)
+    if len(xs) > 12000:  # a fixed subsample: the energy's shape needs no more
+        pick = np.linspace(0, len(xs) - 1, 12000).astype(np.intp)
+        xs, ys = xs[pick], ys[pick]
+    step = 2
+    th = np.radians(np.arange(0, 180, step))  # normal angles
+    proj = np.outer(np.cos(th), xs) + np.outer(np.sin(th), ys)  # (A, N)
+    binw = max(2.0, width)
+    b = ((proj - proj.min(axis=1, keepdims=True)) / binw).astype(np.intp)
+    nb = int(b.max()) + 1
+    counts = np.bincount((b + nb * np.arange(len(th))[:, None]).ravel(), minlength=nb * len(th)).reshape(len(th), nb)
+    energy = (counts.astype(np.float64) ** 2).sum(axis=1)
+    energy = np.convolve(np.concatenate([energy[-2:], energy, energy[:2]]), [0.25, 0.5, 1.0, 0.5, 0.25], "same")[2:-2]
+    i = int(np.argmax(energy))
+    m = len(th)
+    off = np.abs(((np.arange(m) - i + m // 2) % m) - m // 2) * step  # degrees apart
+    peak = (energy >= np.roll(energy, 1)) & (energy >= np.roll(energy, -1)) & (off >= 40)
+    j = int(np.argmax(np.where(peak, energy, -1.0))) if peak.any() else (i + m // 2) % m
+    # line directions: the normals turned a quarter
+    return float(np.mod(th[i] + np.pi / 2, np.pi)), float(np.mod(th[j] + np.pi / 2, np.pi))
+
+
+def _rotation(phi: float, shape: tuple[int, int]) -> tuple[np.ndarray, tuple[int, int]]:
+    """Affine ``(2, 3)`` turning direction ``phi`` to +y (image px -> turned px), and the
+    turned image's size (w, h)."""
+    h, w = shape
+    a = math.pi / 2 - phi
+    R = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], float) @ R.T
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    M = np.concatenate([R, -lo[:, None]], axis=1)
+    size = (int(math.ceil(hi[0] - lo[0])), int(math.ceil(hi[1] - lo[1])))
+    return M, size
+
+
+def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np.ndarray, np.ndarray]:
+    """Tracks of the family running along ``phi``; also the turning affine and the turned mask."""
+    M, (wr, hr) = _rotation(phi, mask.shape)
+    rot = cv2.warpAffine(mask, M, (wr, hr), flags=cv2.INTER_NEAREST)
+    hb = max(4, hr // _BANDS)
+    nb = hr // hb
+    prof = rot[: nb * hb].reshape(nb, hb, wr).sum(axis=1, dtype=np.float32)
+    ww = max(3, int(round(0.3 * hb)) | 1)
+    prof = cv2.blur(prof, (ww, 1))  # the band's ink within a window: a slanted stroke stays whole
+    prof *= ww  # (sums, not means)
+    full = hb * width  # a stroke of the family crossing the whole band
+    thr = 0.5 * full
+    local_max = cv2.dilate(prof, np.ones((1, ww), np.uint8))
+    peaks = (prof >= thr) & (prof >= local_max)
+    tol0 = max(3.0, 0.4 * hb)
+    active: list[dict] = []
+    done: list[dict] = []
+    for k in range(nb):
+        xs = np.flatnonzero(peaks[k])
+        if len(xs) > 1:  # one peak per plateau
+            keep = np.concatenate([[True], np.diff(xs) > 1])
+            xs = xs[keep]
+        vals = prof[k, xs]
+        taken = np.zeros(len(xs), bool)
+        # extend active tracks, nearest prediction first
+        cand = []
+        for ti, tr in enumerate(active):
+            gap = k - tr["k"][-1]
+            pred = tr["x"][-1] + tr["slope"] * gap
+            for pi, x in enumerate(xs):
+                dist = abs(x - pred)
+                if dist <= tol0 * gap:
+                    cand.append((dist, ti, pi))
+        cand.sort()
+        used_t: set[int] = set()
+        for dist, ti, pi in cand:
+            if ti in used_t or taken[pi]:
+                continue
+            tr = active[ti]
+            gap = k - tr["k"][-1]
+            new_slope = (xs[pi] - tr["x"][-1]) / gap
+            tr["slope"] = new_slope if len(tr["k"]) == 1 else 0.5 * (tr["slope"] + new_slope)
+            tr["k"].append(k)
+            tr["x"].append(float(xs[pi]))
+            tr["v"].append(float(vals[pi]))
+            used_t.add(ti)
+            taken[pi] = True
+        for pi in np.flatnonzero(~taken):
+            active.append({"k": [k], "x": [float(xs[pi])], "v": [float(vals[pi])], "slope": 0.0})
+        still = []
+        for tr in active:
+            (still if k - tr["k"][-1] <= 2 else done).append(tr)
+        active = still
+    done.extend(active)
+    Minv = cv2.invertAffineTransform(M)
+    out = []
+    for tr in done:
+        if len(tr["k"]) < 3:
+            continue
+        q = np.stack([np.array(tr["x"]), (np.array(tr["k"]) + 0.5) * hb], axis=1)
+        q = _follow_ends(rot, q, width, hb)
+        pts = q @ Minv[:, :2].T + Minv[:, 2]
+        out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full), len(tr["k"])))
+    return out, M, rot
+
+
+def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.ndarray:
+    """A track ``q`` (turned px, rows increasing) lengthened at both ends along the ink: the
+    band peaks stop up to a band short of a stroke's end (a part-filled band is below the
+    threshold). Rows beyond each end are searched within a stroke width or two of the track's
+    straight continuation; two rows in three without ink end the stroke."""
+    hr, wr = rot.shape
+    r = int(math.ceil(width + 2))
+    out = [q]
+    for end, nxt, sign in ((q[0], q[1], -1), (q[-1], q[-2], 1)):
+        slope = (end[0] - nxt[0]) / (end[1] - nxt[1]) if end[1] != nxt[1] else 0.0
+        rows = end[1] + sign * np.arange(1, int(1.5 * hb))
+        rows = rows[(rows >= 0) & (rows < hr)]
+        if not len(rows):
+            continue
+        xc = np.rint(end[0] + slope * (rows - end[1])).astype(np.intp)
+        cols = xc[:, None] + np.arange(-r, r + 1)[None, :]
+        inside = (cols >= 0) & (cols < wr)
+        hit = np.zeros(cols.shape, bool)
+        ri = np.rint(rows).astype(np.intp)
+        hit[inside] = rot[np.broadcast_to(ri[:, None], cols.shape)[inside], cols[inside]] > 0
+        ink = hit.any(axis=1)
+        miss = ~ink
+        gap = miss[:-2] & miss[1:-1] | miss[1:-1] & miss[2:] if len(miss) > 2 else miss
+        stop = int(np.argmax(gap)) if gap.any() else len(ink)
+        on = np.flatnonzero(ink[:stop])
+        if not len(on):
+            continue
+        last = on[-1]
+        p = np.array([[end[0] + slope * (rows[last] - end[1]), rows[last]]])
+        out = [p] + out if sign < 0 else out + [p]
+    return np.concatenate(out, axis=0)
+
+
+def _extend(p: np.ndarray, by: float) -> np.ndarray:
+    """A polyline with straight extensions of ``by`` px at both ends."""
+    d0 = p[0] - p[1]
+    d1 = p[-1] - p[-2]
+    d0 = d0 / max(float(np.hypot(*d0)), 1e-9)
+    d1 = d1 / max(float(np.hypot(*d1)), 1e-9)
+    return np.concatenate([[p[0] + by * d0], p, [p[-1] + by * d1]])
+
+
+def _intersect(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] | None:
+    """First crossing of polylines ``a`` and ``b``: the point and its arc positions along each."""
+    p, r = a[:-1], a[1:] - a[:-1]
+    q, s = b[:-1], b[1:] - b[:-1]
+    rxs = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
+    qp = q[None, :, :] - p[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[None, :, 1] - qp[..., 1] * s[None, :, 0]) / rxs
+        u = (qp[..., 0] * r[:, None, 1] - qp[..., 1] * r[:, None, 0]) / rxs
+    ok = (np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
+    hit = np.argwhere(ok)
+    if not len(hit):
+        return None
+    i, j = hit[0]
+    la = np.concatenate([[0.0], np.cumsum(np.hypot(*r.T))])
+    lb = np.concatenate([[0.0], np.cumsum(np.hypot(*s.T))])
+    pt = p[i] + t[i, j] * r[i]
+    return pt, float(la[i] + t[i, j] * np.hypot(*r[i])), float(lb[j] + u[i, j] * np.hypot(*s[j]))
+
+
+def _resample(p: np.ndarray, step: float) -> np.ndarray:
+    """Points every ``step`` px along a polyline."""
+    seg = np.hypot(*np.diff(p, axis=0).T)
+    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    t = np.arange(0.0, arc[-1] + 1e-9, step)
+    return np.stack([np.interp(t, arc, p[:, 0]), np.interp(t, arc, p[:, 1])], axis=1)
+
+
+def _sharing(tracks: list[Track], width: float) -> np.ndarray:
+    """``(T, T)`` bool: pairs of tracks that run along the same stroke for a quarter of the
+    shorter one (a track that strays off a line into a mark shares the line's start)."""
+    pts = [_resample(t.pts, 3.0) for t in tracks]
+    out = np.zeros((len(tracks), len(tracks)), bool)
+    near = 2.0 * width + 2.0
+    for i, j in itertools.combinations(range(len(tracks)), 2):
+        a, b = (pts[i], pts[j]) if len(pts[i]) <= len(pts[j]) else (pts[j], pts[i])
+        dist = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+        out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
+    return out
+
+
+def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float
+               ) -> tuple[float, tuple[int, ...], tuple[int, ...], np.ndarray] | None:
+    """The best choice of ``k`` tracks per family forming a '#': (score, chosen a, chosen b,
+    crossings ``(k, k, 2)``)."""
+    h, w = shape
+    ea = [_extend(t.pts, ext) for t in fa]
+    eb = [_extend(t.pts, ext) for t in fb]
+    la = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in ea]
+    lb = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in eb]
+    cross: dict[tuple[int, int], tuple[np.ndarray, float, float] | None] = {}
+
+    def X(i: int, j: int) -> tuple[np.ndarray, float, float] | None:
+        if (i, j) not in cross:
+            cross[(i, j)] = _intersect(ea[i], eb[j])
+        return cross[(i, j)]
+
+    def at_edge(p: np.ndarray) -> bool:
+        m = 0.04 * max(h, w)
+        return bool(p[0] < m or p[1] < m or p[0] > w - m or p[1] > h - m)
+
+    share_a, share_b = _sharing(fa, width), _sharing(fb, width)
+    best = None
+    for ca in itertools.combinations(range(len(fa)), k):
+        if any(share_a[i, j] for i, j in itertools.combinations(ca, 2)):
+            continue
+        for cb in itertools.combinations(range(len(fb)), k):
+            if any(share_b[i, j] for i, j in itertools.combinations(cb, 2)):
+                continue
+            pts = np.zeros((k, k, 2))
+            pos_a = np.zeros((k, k))
+            pos_b = np.zeros((k, k))
+            ok = True
+            for x, i in enumerate(ca):
+                for y, j in enumerate(cb):
+                    c = X(i, j)
+                    if c is None:
+                        ok = False
+                        break
+                    pts[x, y], pos_a[x, y], pos_b[x, y] = c
+                if not ok:
+                    break
+            if not ok:
+                continue
+            # order across: the crossings along each chosen a-line give the b-lines' order
+            # and vice versa; the lattice must not fold
+            oa, ob = np.argsort(pos_b[:, 0]), np.argsort(pos_a[0, :])
+            pts, pos_a, pos_b = pts[oa][:, ob], pos_a[oa][:, ob], pos_b[oa][:, ob]
+            if not (np.all(np.diff(pos_a, axis=1) > 0) or np.all(np.diff(pos_a, axis=1) < 0)):
+                continue
+            if not (np.all(np.diff(pos_b, axis=0) > 0) or np.all(np.diff(pos_b, axis=0) < 0)):
+                continue
+            # cell size along each line between its crossings
+            sa = np.abs(np.diff(pos_a, axis=1))  # (k, k-1) along a-lines
+            sb = np.abs(np.diff(pos_b, axis=0))  # (k-1, k) along b-lines
+            cell = float(np.median(np.concatenate([sa.ravel(), sb.ravel()])))
+            if cell < 0.06 * max(h, w):
+                continue
+            allsz = np.concatenate([sa.ravel(), sb.ravel()])
+            if allsz.max() > 2.6 * allsz.min():
+                continue
+            side = float(max(h, w))
+            chosen = [(fa[i], la[i], pos_a[x]) for x, i in enumerate([ca[v] for v in oa])]
+            chosen += [(fb[j], lb[j], pos_b[:, y]) for y, j in enumerate([cb[v] for v in ob])]
+            score = 0.0
+            for tr, ln, pos in chosen:
+                if tr.span < (k - 1 + 0.4) * cell:  # a grid line spans its cells and some arm
+                    score = -math.inf
+                    break
+                score += tr.strength * min(tr.span, (k + 1.5) * cell) / side  # no more than a '#' line's length
+                for arm, end_pt in ((pos.min() - ext, tr.pts[0]), (ln - ext - pos.max(), tr.pts[-1])):
+                    if arm < 0.15 * cell and not at_edge(end_pt):
+                        score -= 0.15  # no arm: a frame line, or a stroke that ends at the crossing
+            # crossings outside both drawn extents (only on the extensions) are weaker
+            outside = (pos_a < ext - 2).sum() + (pos_b < ext - 2).sum()
+            score -= 0.1 * outside
+            score -= 0.3 * (allsz.max() / allsz.min() - 1.0)
+            if best is None or score > best[0]:
+                best = (score, tuple(ca[v] for v in oa), tuple(cb[v] for v in ob), pts)
+    return best
+
+
+def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
+    """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
+    :class:`NoBoardError` when no two families of crossing strokes form one."""
+    mask, t, width = ink_mask(d)
+    if cv2.countNonZero(mask) < 1e-4 * mask.size:
+        raise NoBoardError("the image holds no ink")
+    phi_a, phi_b = _directions(mask, width)
+    fa, _, _ = _tracks(mask, phi_a, width)
+    fb, _, _ = _tracks(mask, phi_b, width)
+    # the longest few of each family (symbol strokes make short tracks)
+    fa = sorted(fa, key=lambda tr: -tr.span * tr.strength)[:7]
+    fb = sorted(fb, key=lambda tr: -tr.span * tr.strength)[:7]
+    if len(fa) < 2 or len(fb) < 2:
+        raise NoBoardError(f"strokes in {len(fa)} and {len(fb)} lines of the two directions; a grid needs 2 + 2")
+    ext = 0.06 * max(d.shape)
+    found = []
+    for n in sizes:
+        if len(fa) >= n - 1 and len(fb) >= n - 1:
+            b = _best_hash(fa, fb, n - 1, d.shape, ext, width)
+            if b is not None:
+                found.append((b[0] / (2 * (n - 1)), n, b))
+    if not found:
+        raise NoBoardError("no four strokes cross like a '#'")
+    _, n, (score, ca, cb, pts) = max(found, key=lambda f: (f[1] if len(found) > 1 and f[0] > 1.0 else 0, f[0]))
+    cols, rows = [fa[i] for i in ca], [fb[j] for j in cb]
+    # columns: the family closer to the image vertical; left to right, top to bottom
+    dir_a = cols[0].pts[-1] - cols[0].pts[0]
+    if abs(dir_a[0]) > abs(dir_a[1]):
+        cols, rows, pts = rows, cols, pts.transpose(1, 0, 2)
+    if pts[0, 0, 0] > pts[-1, 0, 0]:
+        cols, pts = cols[::-1], pts[::-1]
+    if pts[0, 0, 1] > pts[0, -1, 1]:
+        rows, pts = rows[::-1], pts[:, ::-1]
+    k = n - 1
+    lat = np.array([[i + 1, j + 1] for i in range(k) for j in range(k)], np.float64)
+    img = pts.reshape(-1, 2).astype(np.float64)
+    H, _ = cv2.findHomography(lat, img, 0)
+    if H is None or not np.all(np.isfinite(H)):
+        raise NoBoardError("the '#' crossings do not make a projective grid")
+    p = np.concatenate([lat, np.ones((len(lat), 1))], axis=1) @ H.T
+    err = float(np.sqrt(np.mean(np.sum((p[:, :2] / p[:, 2:3] - img) ** 2, axis=1))))
+    return HashGrid(n, H, cols, rows, pts, width, t, float(score), err)
