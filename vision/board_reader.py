@@ -30,6 +30,18 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    (an X crosses there, an O is hollow) and an enclosed hole (an O encloses one, an X
    does not). A logistic rule turns them into probabilities.
 
+**Hand-drawn grids.** When no field of straight lines shows (a real person's '#': wavy,
+converging lines, no frame, one line stopping at a crossing, pale or coloured pen), the grid
+is looked for as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`: strokes traced as
+curves, four chosen by how a tic-tac-toe grid looks, found on a copy of the photo at one
+fixed scale whatever its size). Its traced lines are erased from the ink, a cell of the
+photo's px is max-pooled onto the rectified cell (a thin pen would alias into dots), the
+ink level is the photo's own (noise and strongest strokes, not a fixed floor), and a mark
+whose centre lies up to 0.9 of a cell past the crossings' lattice still belongs to its
+outer cell (real outer cells are larger than the middle one). Straight ruled fields are
+tried first: on rendered and lab boards that reader is exact, and the '#' path never
+overrides it.
+
 Rows are returned top to bottom and columns left to right *as the image shows them*
 (a board turned more than 45 degrees reads turned). :class:`ThresholdReader` keeps seed
 003's rule as the baseline: the share of pixels darker than a grey level in fixed image
@@ -60,6 +72,7 @@ from .grid_lines import (
     _segments,
     _union_length,
 )
+from .hand_grid import GRID_SIDE_PX, erase_mask, find_hash_grid
 from .ink import _apply, _as_rgb, ink_map
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
@@ -123,17 +136,65 @@ class BoardReader:
         dg = cv2.resize(d, (w // g, h // g), interpolation=cv2.INTER_AREA) if g > 1 else d
         if trace is not None:
             trace["scale"] = scale / g
-        Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
-        H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
-        err *= g
-        line_ref, _ = self._line_contrast(d, H, n)
-        probs, feats = self._read_cells(d, H, n, line_ref)
+        try:  # straight ruled lines first (the lab's and the renderer's boards, frames)
+            Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
+            H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
+            err *= g
+            line_ref, _ = self._line_contrast(d, H, n)
+            probs, feats = self._read_cells(d, H, n, line_ref)
+        except NoBoardError as straight:  # then a hand-drawn '#': wavy, converging, unframed lines
+            if trace is not None:  # the straight-line attempt's lines are not what was read
+                for key in ("lines", "cols", "rows", "lattice", "nodes", "extension"):
+                    trace.pop(key, None)
+            try:
+                H, err, npts, frame, n, probs, feats = self._read_hash(rgb, d, trace)
+            except NoBoardError as hand:
+                raise NoBoardError(f"{straight.reason}; as a hand-drawn '#': {hand.reason}") from None
+        if trace is not None and "hash_to_px" in trace:  # the '#' was read: its px to the image's
+            trace["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ trace["hash_to_px"]
         cells = probs.argmax(axis=-1)
         conf = probs.max(axis=-1)
         if scale < 1.0:
             H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
             err /= scale
         return BoardReading(cells.astype(np.int64), conf, probs, H, float(err), npts, frame, feats)
+
+    # -- hand-drawn '#' -------------------------------------------------------------
+    def _read_hash(self, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object] | None
+                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray]:
+        """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found in
+        the ink of a copy of the photo :data:`GRID_SIDE_PX` on its longer side (the same scale
+        whatever the camera), its lines erased from the ink ``d``, the cells read with the
+        outer cells reaching past the field."""
+        h, w = d.shape
+        f = GRID_SIDE_PX / max(h, w)
+        small = cv2.resize(rgb, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
+        dg = ink_map(small, stroke_px=max(6.0, math.hypot(*small.shape[:2]) / 100))
+        sizes = (self.size,) if self.size is not None else (3, 5)
+        grid = find_hash_grid(dg, sizes)
+        fx, fy = w / dg.shape[1], h / dg.shape[0]
+        to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
+        H = to_d @ grid.H
+        erase = cv2.resize(erase_mask(grid, dg), (w, h), interpolation=cv2.INTER_NEAREST)
+        clean = d.copy()
+        clean[erase > 0] = 0.0
+        # the contrast of real ink: the lines' darkness along their traces
+        pts = np.concatenate([tr.dense for tr in grid.cols + grid.rows]) @ to_d[:2, :2].T + to_d[:2, 2]
+        px = np.clip(np.rint(pts).astype(np.intp), 0, [w - 1, h - 1])
+        line_ref = max(float(np.median(cv2.dilate(d, np.ones((5, 5), np.uint8))[px[:, 1], px[:, 0]])), 1e-3)
+        floor = 0.6 * grid.threshold
+        if trace is not None:
+            trace["hash"] = grid
+            trace["hash_to_px"] = to_d
+        # a cell of the photo spans several rectified px: a thin pen would alias into dots
+        # there, so each px takes the darkest of the photo's px it stands for (a max filter)
+        step = float(np.median(np.hypot(*np.diff(grid.crossings, axis=0).reshape(-1, 2).T))) * fx
+        k = int(step / self.cell_px)
+        if k >= 2:
+            clean = cv2.dilate(clean, np.ones((k, k), np.uint8))
+        probs, feats = self._read_cells(clean, H, grid.n, line_ref, floor=floor, margin_cells=1.0, outer=0.9)
+        npts = int(grid.crossings.shape[0] * grid.crossings.shape[1])
+        return H, grid.error_px * fx, npts, (False, False, False, False), grid.n, probs, feats
 
     # -- grid ------------------------------------------------------------------------
     def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None
@@ -488,14 +549,20 @@ class BoardReader:
         return (_median(on) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
 
     # -- cells -----------------------------------------------------------------------
-    def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float) -> tuple[np.ndarray, np.ndarray]:
+    def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float, floor: float | None = None,
+                    margin_cells: float = 0.5, outer: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Cell probabilities and features. ``floor``: the image's own ink level (noise), which
+        replaces the fixed floors for faint pens; ``margin_cells`` of the map around the field
+        are rectified too (marks that cross the border stay whole), of which ``outer`` cells
+        count for the outer cells."""
         s = self.cell_px
-        o = s // 2  # half a cell of margin all round: marks that cross the border stay whole
+        o = int(round(margin_cells * s))
         # rectified px -> grid cells, with the margin
         M = H @ np.array([[1.0 / s, 0, -o / s], [0, 1.0 / s, -o / s], [0, 0, 1.0]])
         side = n * s + 2 * o
         rect = cv2.warpPerspective(d, M, (side, side), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        rect = _remove_grid_lines(rect, n, s, o, max(0.12, 0.4 * line_ref))
-        feats = board_features(rect, n, s, o, max(0.1, 0.25 * line_ref), 0.25 * line_ref)
+        present, mark = (0.12, 0.1) if floor is None else (floor, floor)
+        rect = _remove_grid_lines(rect, n, s, o, max(present, 0.4 * line_ref))
+        feats = board_features(rect, n, s, o, max(mark, 0.25 * line_ref), 0.25 * line_ref, outer)
         return _probabilities(feats, line_ref), feats

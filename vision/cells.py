@@ -14,9 +14,13 @@ __all__ = ["board_features"]
 _FEATURES = ("peak", "ink", "hollow", "hole", "extent", "elongation", "spread")
 
 
-def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, min_peak: float) -> np.ndarray:
+def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, min_peak: float,
+                   outer: float = 0.0) -> np.ndarray:
     """Features ``(n, n, 7)`` of every cell at once, from the rectified darkness map with
     the grid lines removed (cells ``s`` px, the field ``o`` px in from the map's edge).
+    ``outer``: how far (cells) past the field a mark's centre may lie and still belong to the
+    outer cell beside it (an unframed hand-drawn grid's outer cells are often larger than
+    its middle one).
 
     * ``peak``: the darkest 3 x 3 mean inside the cell (is there real ink at all?).
     * ``ink``: the mark's ink area relative to the cell. The mark is the ink darker than
@@ -53,8 +57,10 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
     area = np.bincount(comp, minlength=n_lab)
     a1 = np.maximum(area, 1)
     cx, cy = np.bincount(comp, xi, n_lab) / a1, np.bincount(comp, yi, n_lab) / a1
-    col, row = np.floor((cx - o + 0.5) / s).astype(int), np.floor((cy - o + 0.5) / s).astype(int)
-    comp_cell = np.where((col >= 0) & (col < n) & (row >= 0) & (row < n), row * n + col, -1)
+    colf, rowf = (cx - o + 0.5) / s, (cy - o + 0.5) / s
+    col, row = np.clip(np.floor(colf), 0, n - 1).astype(int), np.clip(np.floor(rowf), 0, n - 1).astype(int)
+    within = (colf >= -outer) & (colf < n + outer) & (rowf >= -outer) & (rowf < n + outer)
+    comp_cell = np.where(within, row * n + col, -1)
     comp_cell[area < max(4, int(0.015 * s * s))] = -1
     comp_cell[0] = -1
     ok_cell = peaks.ravel() >= min_peak
@@ -103,8 +109,9 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
                 & (top + st_h[1:, cv2.CC_STAT_HEIGHT] < side))
     hole = np.zeros(cells)
     if enclosed.any():
-        hc, hr = np.floor((c_h[1:, 0] - o + 0.5) / s).astype(int), np.floor((c_h[1:, 1] - o + 0.5) / s).astype(int)
-        inside = enclosed & (hc >= 0) & (hc < n) & (hr >= 0) & (hr < n)
+        hcf, hrf = (c_h[1:, 0] - o + 0.5) / s, (c_h[1:, 1] - o + 0.5) / s
+        hc, hr = np.clip(np.floor(hcf), 0, n - 1).astype(int), np.clip(np.floor(hrf), 0, n - 1).astype(int)
+        inside = enclosed & (hcf >= -outer) & (hcf < n + outer) & (hrf >= -outer) & (hrf < n + outer)
         np.maximum.at(hole, (hr * n + hc)[inside], st_h[1:, cv2.CC_STAT_AREA][inside].astype(np.float64))
         hole = hole / np.maximum(bw * bh, 1.0)
     f = out.reshape(cells, 7)
@@ -125,12 +132,14 @@ def _probabilities(f: np.ndarray, ref: float) -> np.ndarray:
     single straight stroke: ``p(mark)`` is the product of two sigmoids. Given a mark,
     ``p(O) = sigmoid(b)``: a ring-like spread of the ink about its centre, a hollow middle
     and an enclosed hole mean O. (On 20,000 rendered marks the spread alone separates them:
-    every X above 0.40, every O below 0.30; the weights put the boundary between.)
+    every X above 0.40, every O below 0.30; the weights put the boundary between. A hollow
+    middle weighs less than the spread: a real, lopsided X whose strokes cross near one end
+    leaves its middle empty too.)
     """
     peak, ink, hollow, hole, extent, elongation, spread = (f[..., i] for i in range(7))
     a_dark = 25.0 * (peak / max(ref, 1e-3) - 0.4)
     a_size = 60.0 * (ink - 0.015) + 12.0 * (extent - 0.25) - 3.0 * np.maximum(elongation - 4.0, 0.0)
-    b = 12.0 * (hollow - 0.5) + 25.0 * (0.34 - spread) + 4.0 * hole
+    b = 6.0 * (hollow - 0.5) + 30.0 * (0.36 - spread) + 5.0 * hole
 
     def sig(v: np.ndarray) -> np.ndarray:
         return 1.0 / (1.0 + np.exp(-np.clip(v, -50, 50)))

@@ -23,7 +23,16 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
         for ln in trace.get(key, []):  # type: ignore[union-attr]
             cv2.line(img, tuple(np.rint(ln.p0 * k).astype(int)), tuple(np.rint(ln.p1 * k).astype(int)), colour, 2,
                      cv2.LINE_AA)
-    if "lattice" in trace and "nodes" in trace:
+    if "hash_to_image" in trace:  # a hand-drawn '#': its traced lines (columns red, rows blue)
+        T = trace["hash_to_image"]
+        grid = trace["hash"]
+        for tracks, colour in ((grid.cols, (255, 40, 40)), (grid.rows, (40, 90, 255))):  # type: ignore[union-attr]
+            for tr in tracks:
+                p = np.rint(_apply(T, tr.dense) * 4).astype(np.int32)  # type: ignore[arg-type]
+                cv2.polylines(img, [p], False, colour, 2, cv2.LINE_AA, shift=2)
+        for p in _apply(T, grid.crossings.reshape(-1, 2)):  # type: ignore[union-attr, arg-type]
+            cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
+    elif "lattice" in trace and "nodes" in trace:
         for p in _apply(trace["lattice"], trace["nodes"].astype(float)) * k:  # type: ignore[union-attr, arg-type]
             cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
     if reading is not None:

@@ -39,7 +39,7 @@ import numpy as np
 
 from .errors import NoBoardError
 
-__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid"]
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
 
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
@@ -55,6 +55,8 @@ class Track:
     pts: np.ndarray
     strength: float
     bands: int
+    frame: tuple[np.ndarray, np.ndarray] | None = None  # (turning affine, turned mask) it was traced in
+    dense: np.ndarray | None = None  # traced every 2 px, once chosen
 
     @property
     def span(self) -> float:
@@ -192,7 +194,7 @@ def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np
                     cand.append((dist, ti, pi))
         cand.sort()
         used_t: set[int] = set()
-        for dist, ti, pi in cand:
+        for _dist, ti, pi in cand:
             if ti in used_t or taken[pi]:
                 continue
             tr = active[ti]
@@ -219,7 +221,12 @@ def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np
         q = np.stack([np.array(tr["x"]), (np.array(tr["k"]) + 0.5) * hb], axis=1)
         q = _follow_ends(rot, q, width, hb)
         pts = q @ Minv[:, :2].T + Minv[:, 2]
-        out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full), len(tr["k"])))
+        # strength: peak ink per band, times the share of the spanned bands that show ink (a
+        # chain of marks in a row links into a track too, with gaps between the marks)
+        cover = len(tr["k"]) / (tr["k"][-1] - tr["k"][0] + 1)
+        if cover < 0.6:
+            continue
+        out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full) * cover, len(tr["k"])))
     return out, M, rot
 
 
@@ -370,6 +377,7 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             chosen = [(fa[i], la[i], pos_a[x]) for x, i in enumerate([ca[v] for v in oa])]
             chosen += [(fb[j], lb[j], pos_b[:, y]) for y, j in enumerate([cb[v] for v in ob])]
             score = 0.0
+            missing = 0
             for tr, ln, pos in chosen:
                 if tr.span < (k - 1 + 0.4) * cell:  # a grid line spans its cells and some arm
                     score = -math.inf
@@ -378,6 +386,9 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
                 for arm, end_pt in ((pos.min() - ext, tr.pts[0]), (ln - ext - pos.max(), tr.pts[-1])):
                     if arm < 0.15 * cell and not at_edge(end_pt):
                         score -= 0.15  # no arm: a frame line, or a stroke that ends at the crossing
+                        missing += 1
+            if missing > k:  # most lines stop at the outer ones: a frame, not a '#'
+                continue
             # crossings outside both drawn extents (only on the extensions) are weaker
             outside = (pos_a < ext - 2).sum() + (pos_b < ext - 2).sum()
             score -= 0.1 * outside
@@ -394,8 +405,12 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
     phi_a, phi_b = _directions(mask, width)
-    fa, _, _ = _tracks(mask, phi_a, width)
-    fb, _, _ = _tracks(mask, phi_b, width)
+    fa, Ma, rot_a = _tracks(mask, phi_a, width)
+    fb, Mb, rot_b = _tracks(mask, phi_b, width)
+    for tr in fa:
+        tr.frame = (Ma, rot_a)
+    for tr in fb:
+        tr.frame = (Mb, rot_b)
     # the longest few of each family (symbol strokes make short tracks)
     fa = sorted(fa, key=lambda tr: -tr.span * tr.strength)[:7]
     fb = sorted(fb, key=lambda tr: -tr.span * tr.strength)[:7]
@@ -410,7 +425,13 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
                 found.append((b[0] / (2 * (n - 1)), n, b))
     if not found:
         raise NoBoardError("no four strokes cross like a '#'")
-    _, n, (score, ca, cb, pts) = max(found, key=lambda f: (f[1] if len(found) > 1 and f[0] > 1.0 else 0, f[0]))
+    # the larger board when its '#' holds up line for line (a 3 x 3 '#' hides in every 5 x 5)
+    found.sort(key=lambda f: f[1])
+    pick = found[0]
+    for f in found[1:]:
+        if f[0] >= 0.6 * pick[0]:
+            pick = f
+    _, n, (score, ca, cb, pts) = pick
     cols, rows = [fa[i] for i in ca], [fb[j] for j in cb]
     # columns: the family closer to the image vertical; left to right, top to bottom
     dir_a = cols[0].pts[-1] - cols[0].pts[0]
@@ -420,6 +441,11 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
         cols, pts = cols[::-1], pts[::-1]
     if pts[0, 0, 1] > pts[0, -1, 1]:
         rows, pts = rows[::-1], pts[:, ::-1]
+    # each chosen line traced densely along its ink, and the crossings taken from those
+    for tr in cols + rows:
+        tr.dense = _dense(tr, width)
+    pts = np.array([[c[0] if (c := _intersect(_extend(a.dense, ext), _extend(b.dense, ext))) is not None else pts[i, j]
+                     for j, b in enumerate(rows)] for i, a in enumerate(cols)])
     k = n - 1
     lat = np.array([[i + 1, j + 1] for i in range(k) for j in range(k)], np.float64)
     img = pts.reshape(-1, 2).astype(np.float64)
@@ -429,3 +455,60 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     p = np.concatenate([lat, np.ones((len(lat), 1))], axis=1) @ H.T
     err = float(np.sqrt(np.mean(np.sum((p[:, :2] / p[:, 2:3] - img) ** 2, axis=1))))
     return HashGrid(n, H, cols, rows, pts, width, t, float(score), err)
+
+
+def _dense(tr: Track, width: float) -> np.ndarray:
+    """The track traced every 2 px along its stroke (image px): per row of the turned
+    image, the ink pixel nearest the band polyline within a third of a band; rows without
+    ink keep the polyline. A wavy line is followed, not cut across."""
+    M, rot = tr.frame
+    hr, wr = rot.shape
+    q = tr.pts @ M[:, :2].T + M[:, 2]
+    if q[0, 1] > q[-1, 1]:
+        q = q[::-1]
+    hb = max(4, hr // _BANDS)
+    rows = np.arange(q[0, 1], q[-1, 1], 2.0)
+    if len(rows) < 2:
+        return tr.pts
+    pred = np.interp(rows, q[:, 1], q[:, 0])
+    r = max(2, int(0.35 * hb))
+    off = np.arange(-r, r + 1)
+    cols = np.rint(pred).astype(np.intp)[:, None] + off[None, :]
+    ri = np.clip(np.rint(rows).astype(np.intp), 0, hr - 1)
+    inside = (cols >= 0) & (cols < wr)
+    hit = np.zeros(cols.shape, bool)
+    hit[inside] = rot[np.broadcast_to(ri[:, None], cols.shape)[inside], cols[inside]] > 0
+    near = np.where(hit, np.abs(off)[None, :], 10 ** 6).argmin(axis=1)
+    x = np.where(hit.any(axis=1), np.rint(pred) + off[near], pred)
+    if len(x) >= 5:  # a run of 5 rows' median: a single stray pixel does not pull the trace
+        x = np.median(np.lib.stride_tricks.sliding_window_view(np.pad(x, 2, mode="edge"), 5), axis=1)
+    Minv = cv2.invertAffineTransform(M)
+    return np.stack([x, rows], axis=1) @ Minv[:, :2].T + Minv[:, 2]
+
+
+def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
+    """uint8 mask (the shape of ``d``, the map the grid was found on) of the chosen lines'
+    ink: along their dense traces, a pen width and a half either side, plus any stroke left
+    hanging at a line's tip (a hand-drawn line often ends in a hook or a flick that leaves
+    its straight course; left in, it would read as a mark in an outer cell)."""
+    out = np.zeros(d.shape, np.uint8)
+    thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
+    tips = np.zeros(d.shape, np.uint8)
+    for tr in grid.cols + grid.rows:
+        p = np.rint(_extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
+        cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
+        for tip in (tr.dense[0], tr.dense[-1]):
+            cv2.circle(tips, tuple(int(v) for v in np.rint(tip)), int(thick + 2), 1, -1)
+    left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
+    n_lab, lab = cv2.connectedComponents(left, connectivity=8)
+    for c in np.unique(lab[(tips > 0) & (left > 0)]):
+        if c == 0:
+            continue
+        ys, xs = np.nonzero(lab == c)
+        if len(xs) < 3:
+            out[ys, xs] = 1
+            continue
+        ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
+        if ev[1] > 5.0 * max(ev[0], 1e-6):  # a flick or hook (elongated), not a mark touching the tip
+            out[ys, xs] = 1
+    return out

@@ -1,0 +1,75 @@
+"""The board reader on real photos of hand-drawn boards (``tests/data/real``: 15 whiteboard
+photos, MIT licence, labelled by eye in ``labels.json``) and on the same photos made harder:
+paler pens, much larger frames, a grid cut off by the picture's edge."""
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from kinegym.vision.board_reader import BoardReader, debug_image
+from kinegym.vision.image_io import read_image
+
+DATA = Path(__file__).parent / "data" / "real"
+LABELS = json.loads((DATA / "labels.json").read_text())["boards"]
+
+
+def matches(text: str, label: str) -> bool:
+    """A reading against a label; '*' in the label: marked, either symbol."""
+    return len(text) == len(label) and all(a == b or (b == "*" and a in "XO") for a, b in zip(text, label))
+
+
+@pytest.mark.parametrize("name", sorted(LABELS))
+def test_every_real_photo_reads_as_labelled(name: str) -> None:
+    reading = BoardReader(size=None).read(read_image(DATA / name))
+    assert matches(reading.text(), LABELS[name]), (name, reading.text(), LABELS[name])
+
+
+def test_the_size_given_or_found_reads_the_same() -> None:
+    for name in ("kvuletic2_image11.jpeg", "kvuletic2_image13.jpeg"):
+        img = read_image(DATA / name)
+        assert BoardReader(size=3).read(img).text() == BoardReader().read(img).text()
+
+
+def test_a_4000_px_photo_reads_as_its_small_copy() -> None:
+    """Every photo is processed at one scale: a 4,000 px frame (here the photo enlarged, with
+    its strokes 7 times as wide in px) reads like the 577 px original."""
+    name = "kvuletic2_image13.jpeg"
+    img = read_image(DATA / name)
+    big = cv2.resize(img, (4000, 3000), interpolation=cv2.INTER_CUBIC)
+    assert matches(BoardReader().read(big).text(), LABELS[name])
+
+
+def washed_out(img: np.ndarray, contrast: float) -> np.ndarray:
+    return np.clip(255 - (255 - img.astype(np.float64)) * contrast, 0, 255).astype(np.uint8)
+
+
+def test_a_pale_pen_is_ink_too() -> None:
+    """The photos washed out: at 60 % of their contrast every board reads; at 45 % (the
+    strongest strokes about 0.11 darker than the board, as pale as ballpoint) 14 of 15 do
+    (measured: image7's crossed-out O is lost)."""
+    right = {c: sum(matches(BoardReader().read(washed_out(read_image(DATA / name), c)).text(), label)
+                    for name, label in LABELS.items()) for c in (0.6, 0.45)}
+    assert right[0.6] == len(LABELS) and right[0.45] >= len(LABELS) - 1, right
+
+
+def test_a_grid_cut_off_by_the_frame_edge() -> None:
+    """The top of the photo cropped just above the grid's top crossings: the column lines
+    run out of the picture and the top row is a sliver."""
+    name = "kvuletic2_image10.jpeg"
+    img = read_image(DATA / name)
+    cut = np.ascontiguousarray(img[75:])
+    assert matches(BoardReader().read(cut).text(), LABELS[name])
+
+
+def test_debug_image_shows_the_traced_hand_drawn_lines() -> None:
+    img = read_image(DATA / "kvuletic2_image14.jpeg")
+    trace: dict[str, object] = {}
+    reading = BoardReader().read(img, trace)
+    assert "hash" in trace and "lines" not in trace  # the '#' was read, not straight lines
+    out = debug_image(img, reading, trace)
+    # the traced column lines are drawn red where the photo had teal ink
+    red = (out[..., 0] > 200) & (out[..., 1] < 80) & (out[..., 2] < 80)
+    assert red.sum() > 300 and not ((img[..., 0] > 200) & (img[..., 1] < 80)).any()
