@@ -13,6 +13,8 @@ Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
   highlighter scribbles.
 * ``hard 3x3`` and ``lab 5x5`` (the thesis's set-up: camera on a stand, black pen).
 
+Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px.
+
 Per set: cells right, whole boards right, X-vs-O right among cells both call marked,
 boards refused (NoBoardError), and the reader's time per frame (median, p95). The seed's
 :class:`ThresholdReader` is calibrated once for the camera's nominal pose (straight down
@@ -89,6 +91,46 @@ def main() -> None:
             ms = f"{np.median(t):.1f} / {np.percentile(t, 95):.1f}" if key == "ours" else "-"
             print(f"| {name} | {label} | {r[0] / (count * n * n):.2%} | {r[1] / count:.1%} | "
                   f"{r[3] / max(r[2], 1):.2%} | {r[4]} | {ms} |", flush=True)
+    real_photos()
+
+
+def real_photos() -> None:
+    """The 15 real dev photos (``tests/data/real``, labelled by eye): cells and boards right,
+    refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
+    4,000 px phone photo (the reader works at one scale whatever the camera)."""
+    import json
+    from pathlib import Path
+
+    import cv2
+
+    from kinegym.vision.image_io import read_image
+
+    data = Path(__file__).resolve().parent.parent / "tests" / "data" / "real"
+    labels = json.loads((data / "labels.json").read_text())["boards"]
+    reader = BoardReader(size=3)
+    print("\n| real dev photos (15, whiteboard) | cells right | boards right | refused | ms per frame median / max |")
+    print("|---|---|---|---|---|")
+    sizes = (("as taken, 577 x 433", None), ("enlarged to 960 x 720", 960), ("enlarged to 4000 x 3000", 4000))
+    for label, side in sizes:
+        cells = boards = refused = 0
+        times = []
+        for name, want in labels.items():
+            img = read_image(data / name)
+            if side:
+                img = cv2.resize(img, (side, side * 3 // 4), interpolation=cv2.INTER_CUBIC)
+            t0 = time.perf_counter()
+            try:
+                got = reader.read(img).text()
+            except NoBoardError:
+                got = ""
+                refused += 1
+            times.append(time.perf_counter() - t0)
+            ok = [len(got) == len(want) and (a == b or (b == "*" and a in "XO")) for a, b in zip(got, want) if b != "|"]
+            cells += sum(ok)
+            boards += bool(ok) and all(ok)
+        t = np.asarray(times) * 1e3
+        print(f"| {label} | {cells / (9 * len(labels)):.1%} | {boards}/{len(labels)} | {refused} | "
+              f"{np.median(t):.1f} / {t.max():.1f} |", flush=True)
 
 
 if __name__ == "__main__":

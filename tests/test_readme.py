@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -89,6 +90,7 @@ def test_the_shell_examples_exit_cleanly(tmp_path: Path) -> None:
     bin_dir = str(Path(sys.executable).parent)
     env = {**os.environ, "PATH": bin_dir + os.pathsep + os.environ.get("PATH", ""), "SDL_VIDEODRIVER": "dummy",
            "MPLBACKEND": "Agg"}
+    shutil.copytree(ROOT / "tests" / "data", tmp_path / "tests" / "data")  # as in a clone: the real photos
     ran, failed = 0, []
     for line_no, cmd in _examples():
         if any(cmd.startswith(prefix) for prefix in NOT_RUN):
