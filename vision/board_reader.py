@@ -92,6 +92,16 @@ __all__ = [
 ]
 
 
+def _darkest_near(d: np.ndarray, px: np.ndarray) -> np.ndarray:
+    """The darkest value within 2 px of each point ``px`` ``(N, 2)`` (x, y) of the map ``d``:
+    a 5 x 5 dilation evaluated at those points only."""
+    h, w = d.shape
+    off = np.arange(-2, 3)
+    ys = np.clip(px[:, 1, None, None] + off[None, :, None], 0, h - 1)
+    xs = np.clip(px[:, 0, None, None] + off[None, None, :], 0, w - 1)
+    return d[ys, xs].max(axis=(1, 2))
+
+
 class BoardReader:
     """Finds the grid and reads every cell (see the module docstring).
 
@@ -180,8 +190,7 @@ class BoardReader:
         clean[erase > 0] = 0.0
         # the contrast of real ink: the lines' darkness along their traces
         pts = np.concatenate([tr.dense for tr in grid.cols + grid.rows]) @ to_d[:2, :2].T + to_d[:2, 2]
-        px = np.clip(np.rint(pts).astype(np.intp), 0, [w - 1, h - 1])
-        line_ref = max(float(np.median(cv2.dilate(d, np.ones((5, 5), np.uint8))[px[:, 1], px[:, 0]])), 1e-3)
+        line_ref = max(float(np.median(_darkest_near(d, np.rint(pts).astype(np.intp)))), 1e-3)
         floor = 0.6 * grid.threshold
         if trace is not None:
             trace["hash"] = grid
@@ -539,11 +548,7 @@ class BoardReader:
         ok = (px[:, 0] >= 0) & (px[:, 0] < wid) & (px[:, 1] >= 0) & (px[:, 1] < hgt)
         if not ok.any():
             return 0.5, 0.0
-        # the darkest pixel within 2 px of each sample (a 5 x 5 dilation, at the samples only)
-        off = np.arange(-2, 3)
-        ys = np.clip(px[ok, 1, None, None] + off[None, :, None], 0, hgt - 1)
-        xs = np.clip(px[ok, 0, None, None] + off[None, None, :], 0, wid - 1)
-        vals = d[ys, xs].max(axis=(1, 2))
+        vals = _darkest_near(d, px[ok])
         floor = 0.15
         on = vals[vals > floor]
         return (_median(on) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())

@@ -57,10 +57,7 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
     area = np.bincount(comp, minlength=n_lab)
     a1 = np.maximum(area, 1)
     cx, cy = np.bincount(comp, xi, n_lab) / a1, np.bincount(comp, yi, n_lab) / a1
-    colf, rowf = (cx - o + 0.5) / s, (cy - o + 0.5) / s
-    col, row = np.clip(np.floor(colf), 0, n - 1).astype(int), np.clip(np.floor(rowf), 0, n - 1).astype(int)
-    within = (colf >= -outer) & (colf < n + outer) & (rowf >= -outer) & (rowf < n + outer)
-    comp_cell = np.where(within, row * n + col, -1)
+    comp_cell = _cell_of(cx, cy, n, s, o, outer)
     comp_cell[area < max(4, int(0.015 * s * s))] = -1
     comp_cell[0] = -1
     ok_cell = peaks.ravel() >= min_peak
@@ -109,10 +106,9 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
                 & (top + st_h[1:, cv2.CC_STAT_HEIGHT] < side))
     hole = np.zeros(cells)
     if enclosed.any():
-        hcf, hrf = (c_h[1:, 0] - o + 0.5) / s, (c_h[1:, 1] - o + 0.5) / s
-        hc, hr = np.clip(np.floor(hcf), 0, n - 1).astype(int), np.clip(np.floor(hrf), 0, n - 1).astype(int)
-        inside = enclosed & (hcf >= -outer) & (hcf < n + outer) & (hrf >= -outer) & (hrf < n + outer)
-        np.maximum.at(hole, (hr * n + hc)[inside], st_h[1:, cv2.CC_STAT_AREA][inside].astype(np.float64))
+        hole_cell = _cell_of(c_h[1:, 0], c_h[1:, 1], n, s, o, outer)
+        inside = enclosed & (hole_cell >= 0)
+        np.maximum.at(hole, hole_cell[inside], st_h[1:, cv2.CC_STAT_AREA][inside].astype(np.float64))
         hole = hole / np.maximum(bw * bh, 1.0)
     f = out.reshape(cells, 7)
     f[has, 1] = cnt[has] / float(s * s)
@@ -122,6 +118,15 @@ def board_features(rect: np.ndarray, n: int, s: int, o: int, threshold: float, m
     f[has, 5] = elong[has]
     f[has, 6] = spread[has]
     return out
+
+
+def _cell_of(x: np.ndarray, y: np.ndarray, n: int, s: int, o: int, outer: float) -> np.ndarray:
+    """Flat cell index (row * n + col) of rectified points, or -1 for points more than
+    ``outer`` cells outside the field; points in that band belong to the outer cell beside them."""
+    cf, rf = (x - o + 0.5) / s, (y - o + 0.5) / s
+    col, row = np.clip(np.floor(cf), 0, n - 1).astype(int), np.clip(np.floor(rf), 0, n - 1).astype(int)
+    within = (cf >= -outer) & (cf < n + outer) & (rf >= -outer) & (rf < n + outer)
+    return np.where(within, row * n + col, -1)
 
 
 def _probabilities(f: np.ndarray, ref: float) -> np.ndarray:

@@ -63,9 +63,6 @@ class Track:
         """End-to-end distance (px): a track that zigzags between strokes gains nothing."""
         return float(np.hypot(*(self.pts[-1] - self.pts[0])))
 
-    @property
-    def length(self) -> float:
-        return float(np.hypot(*np.diff(self.pts, axis=0).T).sum()) if len(self.pts) > 1 else 0.0
 
 
 @dataclass
