@@ -19,7 +19,7 @@ import numpy as np
 from kinegym.envs.climb_task import candidate_holes
 from kinegym.envs.sim.climber import KinematicClimber, PhysicsClimber
 from kinegym.envs.sim.climber_model import ClimberModel
-from kinegym.envs.sim.gait import MovePlan, plan_move
+from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
 from kinegym.kinematics.holes import HoleMap
 from kinegym.kinematics.localization import Localizer
 from kinegym.kinematics.pose_fit import AmbiguousFixError, Fix, NoFixError, NoiseModel
@@ -90,10 +90,12 @@ class ClimbRobot:
             near = candidate_holes(holes, stance, k, 2.0 * reach)
             cand = (near + [-1] * k)[:k]
             mask = np.zeros(3 * k, dtype=bool)
+            rest = rest_pose(self.model, holes, stance)
             for i, h in enumerate(cand):
                 if h >= 0:
                     for arm in range(3):
-                        mask[arm * k + i] = isinstance(plan_move(self.model, holes, stance, arm, h, 0.0), MovePlan)
+                        mask[arm * k + i] = isinstance(plan_move(self.model, holes, stance, arm, h, rest=rest),
+                                                       MovePlan)
             got = cache[stance] = (cand, mask)
         return list(got[0]), got[1].copy()
 

@@ -49,7 +49,15 @@ from collections.abc import Sequence
 import numpy as np
 
 from kinegym.envs.sim.climber_model import _G_CM, OUTCOMES, ClimberModel
-from kinegym.envs.sim.gait import GaitResult, MovePlan, _around, _path_length, min_enclosing_circle, plan_move
+from kinegym.envs.sim.gait import (
+    GaitResult,
+    MovePlan,
+    _around,
+    _path_length,
+    min_enclosing_circle,
+    plan_move,
+    rest_pose,
+)
 from kinegym.kinematics.climber import arm_ik_one
 from kinegym.kinematics.holes import HoleMap
 
@@ -135,12 +143,12 @@ class KinematicClimber(ClimberSim):
     def move(self, arm: int, hole: int) -> GaitResult:
         plan = self.judge(arm, hole)
         if not isinstance(plan, MovePlan):
-            return GaitResult(plan[0], plan[1], self.stance, self.pose.copy())
+            return GaitResult(plan[0], plan[1], self.stance, self.pose.copy(), phase="plan")
         st = list(self.stance)
         st[arm] = hole
         self.stance = (st[0], st[1], st[2])
-        self.pose = np.array(plan.pose_to)
-        self.q = plan.q_to.copy()
+        self.pose = np.array(plan.pose_end)
+        self.q = plan.q_end.copy()  # type: ignore[union-attr]
         return GaitResult("ok", "moved", self.stance, self.pose.copy(), plan=plan)
 
 
@@ -161,6 +169,7 @@ class PhysicsClimber(ClimberSim):
         self.model = model or ClimberModel.from_config()
         self.dt = 1.0 / self.model.phys.physics_hz
         self.total_steps = 0
+        self.stalled = ""  # which servo stalled last
 
     # -- construction ------------------------------------------------------------------
     def reset(self, holes: HoleMap, stance: Sequence[int], heading: float = 0.0) -> None:
@@ -316,6 +325,7 @@ class PhysicsClimber(ClimberSim):
                         if abs(self.motors[k][n].impulse) >= limits[k][n]:
                             stalled[2 * k + n] += 1
                             if stalled[2 * k + n] >= stall_steps:
+                                self.stalled = f"arm {k + 1}'s {('shoulder', 'elbow')[n]} servo"
                                 return "torque_limit"
                         else:
                             stalled[2 * k + n] = 0
@@ -329,15 +339,15 @@ class PhysicsClimber(ClimberSim):
         steps0 = self.total_steps
         plan = plan_move(self.model, self.holes, self.stance, arm, hole, float(self.pose[2]))
 
-        def result(outcome: str, reason: str) -> GaitResult:
+        def result(outcome: str, reason: str, phase: str = "") -> GaitResult:
             n = self.total_steps - steps0
             return GaitResult(outcome, reason, self.stance, self.pose, n, n * self.dt,
-                              plan if isinstance(plan, MovePlan) else None)
+                              plan if isinstance(plan, MovePlan) else None, phase)
 
         if not isinstance(plan, MovePlan) and plan[0] == "unreachable":
-            return result(*plan)  # no body pose exists: the robot does not try
+            return result(*plan, "plan")  # no body pose exists: the robot does not try
         if self._hold() < 3:
-            return result("fell", "the robot holds fewer than three holes")
+            return result("fell", "the robot holds fewer than three holes", "plan")
         # the pose to shift to: the plan's, or (the planner expects the servos to fail)
         # the same minimal-circle pose, tried anyway - physics decides
         if isinstance(plan, MovePlan):
@@ -350,30 +360,19 @@ class PhysicsClimber(ClimberSim):
             target_pose = (cx, cy, float(self.pose[2]))
             st[arm] = hole
             q_to = self._ik_all(target_pose, [tuple(xy[h]) for h in st])
-        start = self.pose
         held = [tuple(self.holes.xy[h]) for h in self.stance]
         # 1. shift the body with all three hands gripping
-        dist = math.hypot(target_pose[0] - start[0], target_pose[1] - start[1])
-        t_shift = max(0.2, dist / p.shift_speed_cm_s)
-        n_shift = int(t_shift / self.dt)
-
-        def shift(t: float) -> None:
-            f = min(1.0, t / t_shift)
-            f = f * f * (3 - 2 * f)  # smooth start and stop
-            pose = (start[0] + f * (target_pose[0] - start[0]), start[1] + f * (target_pose[1] - start[1]),
-                    start[2] + f * math.remainder(target_pose[2] - start[2], 2 * math.pi))
-            self.targets = self._ik_all(pose, held)
-
-        lost = self._run(n_shift + int(0.3 / self.dt), shift)
+        start = self.pose
+        lost = self._shift(target_pose, held)
         if lost in ("torque_limit", None) and (lost or self._sagging(0.3)):
             # a servo stalled, or the servos cannot hold the shifted pose: go back
-            back = self._run(n_shift + int(0.3 / self.dt), lambda t: setattr(
-                self, "targets", self._ik_all(start, held)), stall=False)
+            back = self._shift(start, held, stall=False)
             if back:
-                return result(back, "a gripper let go while the body shifted back")
-            return result("torque_limit", "a servo stalled while the body shifted; it shifted back")
+                return result(back, "a gripper let go while the body shifted back", "shift")
+            what = f"{self.stalled} stalled" if lost else "the servos could not hold the shifted pose (it sagged)"
+            return result("torque_limit", f"{what} while the body shifted; it shifted back", "shift")
         if lost:
-            return result(lost, "a gripper let go while the body shifted")
+            return result(lost, "a gripper let go while the body shifted", "shift")
         # 2. release, 3. swing along a straight line in the wall frame, 4. grip
         old = held[arm]
         new = tuple(self.holes.xy[hole])
@@ -399,12 +398,13 @@ class PhysicsClimber(ClimberSim):
         lost = self._run(n_swing, swing)
         if lost == "torque_limit":  # a servo stalled: the hand goes back to its hole
             return self._swing_back(arm, swing, n_swing, old, result, "torque_limit",
-                                    f"a servo stalled while arm {arm + 1} swung; the hand went back to its hole")
+                                    f"{self.stalled} stalled while arm {arm + 1} swung; the hand went back to "
+                                    "its hole")
         if lost:
-            return result(lost, f"a gripper let go while arm {arm + 1} swung")
+            return result(lost, f"a gripper let go while arm {arm + 1} swung", "swing")
         captured = self._wait_capture(arm, new, 0.6)
         if lost := (captured if isinstance(captured, str) else None):
-            return result(lost, f"a gripper let go while arm {arm + 1} reached for its hole")
+            return result(lost, f"a gripper let go while arm {arm + 1} reached for its hole", "reach")
         if captured is True:
             self._grip(arm, hole)
             st = list(self.stance)
@@ -413,27 +413,58 @@ class PhysicsClimber(ClimberSim):
             self.targets = q_to.copy() if isinstance(plan, MovePlan) else self.targets
             lost = self._run(int(0.3 / self.dt), lambda t: None)
             if lost:
-                return result(lost, "a gripper let go after the grip")
+                return result(lost, "a gripper let go after the grip", "grip")
+            # 5. come to rest on the new holes (the pose every move starts from)
+            rest = plan.pose_end if isinstance(plan, MovePlan) else rest_pose(self.model, self.holes, self.stance,
+                                                                               float(self.pose[2]))
+            if isinstance(rest, str):
+                return result("ok", "moved (stayed where it gripped: " + rest + ")")
+            lost = self._shift(rest, [tuple(self.holes.xy[h]) for h in self.stance], stall=False)
+            if lost:
+                return result(lost, "a gripper let go while the body came to rest on its new holes", "rest")
             return result("ok", "moved")
         # missed: swing back to the old hole and grip it again
         return self._swing_back(arm, swing, n_swing, new, result, "missed_hole",
                                 f"arm {arm + 1} did not reach hole {tuple(self.holes.ids[hole])} (the servos "
                                 f"sagged); it went back to its hole")
 
+    def _shift(self, to: Sequence[float], held: Sequence[tuple[float, float]], stall: bool = True) -> str | None:
+        """Shift the body in a straight line to pose ``to`` with the hands on ``held`` (inverse
+        kinematics of all three arms along the way), paced so that no joint is asked for more
+        than ``shift_servo_share`` of the servo speed, then settle 0.3 s; what :meth:`_run` says."""
+        p = self.model.phys
+        start = self.pose
+        dist = math.hypot(to[0] - start[0], to[1] - start[1])
+        q0, q1 = self._ik_all(start, held), self._ik_all(to, held)
+        turn = float(np.max(np.abs(np.remainder(q1 - q0 + math.pi, 2 * math.pi) - math.pi)))
+        vmax = math.radians(p.servo_speed_dps) * p.shift_servo_share
+        # a smoothstep's peak rate is 1.5x its mean
+        t_shift = max(0.2, dist / p.shift_speed_cm_s, 1.5 * turn / vmax)
+
+        def shift(t: float) -> None:
+            f = min(1.0, t / t_shift)
+            f = f * f * (3 - 2 * f)  # smooth start and stop
+            pose = (start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]),
+                    start[2] + f * math.remainder(to[2] - start[2], 2 * math.pi))
+            self.targets = self._ik_all(pose, held)
+
+        return self._run(int(t_shift / self.dt) + int(0.3 / self.dt), shift, stall=stall)
+
     def _swing_back(self, arm: int, swing: object, n_swing: int, frm: tuple[float, float], result: object,
                     outcome: str, reason: str) -> GaitResult:
         """Bring the swinging hand back to its old hole and grip it: ``outcome`` if that
         works, a fall if it does not."""
         old = tuple(self.holes.xy[self.stance[arm]])
+        phase = "reach" if outcome == "missed_hole" else "swing"
         lost = self._run(n_swing, lambda t: swing(t, frm, old), stall=False)  # type: ignore[operator]
         if lost:
-            return result(lost, f"{reason}; a gripper let go on the way")  # type: ignore[operator]
+            return result(lost, f"{reason}; a gripper let go on the way", phase)  # type: ignore[operator]
         back = self._wait_capture(arm, old, 0.6)
         if back is True:
             self._grip(arm, self.stance[arm])
             self._run(int(0.3 / self.dt), lambda t: None, stall=False)
-            return result(outcome, reason)  # type: ignore[operator]
-        return result("fell", f"{reason}, but could not find it")  # type: ignore[operator]
+            return result(outcome, reason, phase)  # type: ignore[operator]
+        return result("fell", f"{reason}, but could not find it", phase)  # type: ignore[operator]
 
     def _shoulder(self, pose: Sequence[float], k: int) -> tuple[float, float]:
         g = self.model.geom

@@ -55,6 +55,8 @@ class ClimberPhysics:
     torque_safety: float = _spec(0.85, hi=2.0)
     stall_s: float = _spec(0.5, doc="a servo at its limit this long stalls (s)")
     shift_speed_cm_s: float = _spec(4.0)
+    shift_servo_share: float = _spec(0.6, hi=1.0, doc="a body shift asks no joint for more than this share of "
+                                                      "the servo speed")
     swing_speed_cm_s: float = _spec(8.0)
     encoder_step_deg: float = _spec(0.05, lo_open=False, doc="quantisation step (0 = none)")
     physics_hz: float = _spec(240.0, lo=30.0, lo_open=False, hi=5000.0)

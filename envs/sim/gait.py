@@ -23,7 +23,17 @@ from kinegym.envs.sim.climber_model import ClimberModel, G
 from kinegym.kinematics.climber import arm_ik_one
 from kinegym.kinematics.holes import HoleMap
 
-__all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "min_enclosing_circle"]
+__all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "min_enclosing_circle", "rest_pose",
+           "PHASES", "SWING_CHECKS", "SHIFT_CHECKS"]
+
+#: The gait's phases, in order, that a failed move names: judged before trying (``plan``),
+#: the body ``shift`` on the old holes, the ``swing``, ``reach``-ing into the new hole, the
+#: ``grip``, coming to ``rest`` on the new holes.
+PHASES = ("plan", "shift", "swing", "reach", "grip", "rest")
+#: Points along a swing (besides its end) where :func:`plan_move` checks the statics.
+SWING_CHECKS = 8
+#: Segments of a body shift whose inner points :func:`plan_move` checks for clearance.
+SHIFT_CHECKS = 8
 
 
 def min_enclosing_circle(pts: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
@@ -75,17 +85,20 @@ class MovePlan:
 
     arm: int
     hole: int
-    pose_from: tuple[float, float, float]
-    pose_to: tuple[float, float, float]
-    q_to: np.ndarray
+    pose_from: tuple[float, float, float]  # the rest pose on the old stance (:func:`rest_pose`)
+    pose_to: tuple[float, float, float]  # the swing pose: centre of the four holes' circle
+    q_to: np.ndarray  # at pose_to, hands on the new stance
     torque_ratio: float  # worst servo torque over its limit during the swing (best split)
     grip_force_n: float  # largest holding force during the swing
+    pose_end: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the rest pose on the new stance
+    q_end: np.ndarray | None = None  # at pose_end
 
 
 @dataclass
 class GaitResult:
     """What one move did: ``outcome`` (one of :data:`OUTCOMES`), a human ``reason``, the
-    stance and true pose after it, the physics steps and simulated seconds it took."""
+    stance and true pose after it, the physics steps and simulated seconds it took, and the
+    ``phase`` of the gait a failure happened in (:data:`PHASES`; ``""`` when it went well)."""
 
     outcome: str
     reason: str
@@ -94,6 +107,7 @@ class GaitResult:
     steps: int = 0
     seconds: float = 0.0
     plan: MovePlan | None = None
+    phase: str = ""
 
     @property
     def ok(self) -> bool:
@@ -235,11 +249,58 @@ def _minimax_line(lines: Sequence[tuple[float, float]]) -> float:
     return 0.5 * (lo + hi)
 
 
+def rest_pose(model: ClimberModel, holes: HoleMap, stance: Sequence[int], heading: float = 0.0
+              ) -> tuple[float, float, float] | str:
+    """Where the body rests on ``stance`` between moves: the centre of the smallest circle
+    round its three holes (each less its arm's shoulder offset), the pose with the most reach
+    to spare. A reason (str) when that pose cannot hold the stance: a hole out of an arm's
+    reach, or under the body (within ``body_radius_cm + reach_margin_cm``: three holes in a
+    row put the middle one there)."""
+    xy, offs, ids = holes.xy_list, model.offsets(heading), holes.id_list
+    pts = [(xy[h][0] - offs[k][0], xy[h][1] - offs[k][1]) for k, h in enumerate(stance)]
+    cx, cy, r = min_enclosing_circle(pts)
+    inner, outer = model.reach
+    clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
+    for k in range(3):
+        d = math.hypot(pts[k][0] - cx, pts[k][1] - cy)
+        if d > outer[k] or d < max(inner[k], clear):
+            return (f"the robot cannot rest on holes {[ids[h] for h in stance]}: hole {ids[stance[k]]} would lie "
+                    f"{d:.1f} cm from the body centre (arm {k + 1} holds {max(inner[k], clear):.1f}.."
+                    f"{outer[k]:.1f} cm)")
+    return cx, cy, heading
+
+
+def _shift_clear(model: ClimberModel, a: tuple[float, float, float], b: tuple[float, float, float],
+                 pts: Sequence[tuple[float, float]]) -> int | None:
+    """Does the straight body shift from pose ``a`` to ``b`` keep every held hole (``pts``,
+    each less its shoulder offset) out from under the body and within its arm's reach? The
+    first arm (0..2) that fails, or None. (Reach is convex, so only the ends could break it;
+    the body's clearance is not, so a shift may pass over a hole that both ends clear.)"""
+    inner, outer = model.reach
+    clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
+    for i in range(1, SHIFT_CHECKS):
+        f = i / SHIFT_CHECKS
+        x, y = a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])
+        for k in range(3):
+            d = math.hypot(pts[k][0] - x, pts[k][1] - y)
+            if d > outer[k] or d < max(inner[k], clear):
+                return k
+    return None
+
+
 def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: int, hole: int,
-              heading: float = 0.0, branch: int = 1) -> MovePlan | tuple[str, str]:
+              heading: float = 0.0, branch: int = 1, rest: tuple[float, float, float] | str | None = None
+              ) -> MovePlan | tuple[str, str]:
     """Judge moving ``arm`` (0..2) from its hole to map row ``hole``: a :class:`MovePlan`, or
     ``(outcome, reason)`` with the outcome ``unreachable`` or ``torque_limit`` (or
-    ``grip_lost`` when a gripper would have to hold more than it can)."""
+    ``grip_lost`` when a gripper would have to hold more than it can).
+
+    The move: from the rest pose on ``stance`` (:func:`rest_pose`; ``rest`` passes it in when
+    the caller judges many moves from one stance) shift to the centre of the four holes'
+    circle, swing, grip, shift to the rest pose on the new stance. Checked: reach and the
+    body's clearance at every pose and along both shifts, elbow limits at the ends and along
+    the swing, and the statics at the end of the swing and at :data:`SWING_CHECKS` points
+    along it."""
     p = model.phys
     ids = holes.id_list
     if hole in stance:
@@ -269,6 +330,19 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     pose_to = (cx, cy, heading)
     new_stance = [s0, s1, s2]
     new_stance[arm] = hole
+    # the gait rests on its three holes between moves: shift rest -> pose_to on the old
+    # holes, swing, then pose_to -> the new rest on the new holes
+    pose_from = rest_pose(model, holes, stance, heading) if rest is None else rest
+    pose_end = rest_pose(model, holes, new_stance, heading)
+    if isinstance(pose_from, str) or isinstance(pose_end, str):
+        return "unreachable", pose_end if isinstance(pose_end, str) else pose_from
+    new_pts = list(pts[:3])
+    new_pts[arm] = pts[3]
+    for a, b, held, st in ((pose_from, pose_to, pts[:3], stance), (pose_to, pose_end, new_pts, new_stance)):
+        bad = _shift_clear(model, a, b, held)
+        if bad is not None:
+            return "unreachable", (f"the body would pass over hole {ids[st[bad]]} (or out of arm {bad + 1}'s reach) "
+                                   f"while it shifts")
     q = []
     lo, hi = model.geom.elbow_limits
     c, s = math.cos(heading), math.sin(heading)
@@ -281,15 +355,42 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
             return "unreachable", (f"arm {k + 1} would need an elbow of {math.degrees(ek):.0f} deg (limits "
                                    f"{math.degrees(lo):.0f}..{math.degrees(hi):.0f})")
         q.append((sk, ek))
+    # the statics along the whole swing: the free hand sweeps round its shoulder from the old
+    # hole to the new one (:func:`_around`, the path physics drives), its weight's moment on
+    # the body changing as it goes; the end (f = 1) is the hand at its new hole
     hands = [xy[h] for h in new_stance]
-    ratio, grip = swing_loads(model, pose_to, hands, q, arm, p.torque_safety)
-    if ratio > p.torque_safety:
-        # which limit bites? without the grippers' limit, is there a split?
-        if swing_loads(model, pose_to, hands, q, arm, p.torque_safety, hold=math.inf)[0] > p.torque_safety:
-            return "torque_limit", (f"no split of the body's weight between the two holding arms keeps every "
-                                    f"servo within {p.torque_safety:.0%} of its torque while arm {arm + 1} swings")
-        return "grip_lost", f"a gripper would have to hold more than {p.holding_force_n:g} N while arm {arm + 1} swings"
-    return MovePlan(arm, hole, (0.0, 0.0, heading), pose_to, np.array(q), ratio, grip)
+    ax, ay = offs[arm]
+    shoulder = (cx + ax, cy + ay)
+    old = xy[stance[arm]]
+    worst, grip = 0.0, 0.0
+    for i in (SWING_CHECKS, *range(SWING_CHECKS)):  # the end first: it rejects most
+        f = i / SWING_CHECKS
+        hand = hands[arm] if i == SWING_CHECKS else _around(shoulder, old, hands[arm], f)
+        hs, qs = list(hands), list(q)
+        if i < SWING_CHECKS:
+            bx, by = hand[0] - shoulder[0], hand[1] - shoulder[1]
+            sk, ek = arm_ik_one(links[arm][0], links[arm][1], c * bx + s * by, -s * bx + c * by, branch)
+            if not lo <= ek <= hi:
+                return "unreachable", (f"arm {arm + 1} would need an elbow of {math.degrees(ek):.0f} deg on its "
+                                       f"swing (limits {math.degrees(lo):.0f}..{math.degrees(hi):.0f})")
+            hs[arm], qs[arm] = hand, (sk, ek)
+        ratio, g = swing_loads(model, pose_to, hs, qs, arm, p.torque_safety)
+        if ratio > p.torque_safety:
+            where = "at its new hole" if i == SWING_CHECKS else f"{f:.0%} of the way along its swing"
+            # which limit bites? without the grippers' limit, is there a split?
+            if swing_loads(model, pose_to, hs, qs, arm, p.torque_safety, hold=math.inf)[0] > p.torque_safety:
+                return "torque_limit", (f"no split of the body's weight between the two holding arms keeps every "
+                                        f"servo within {p.torque_safety:.0%} of its torque with arm {arm + 1} "
+                                        f"{where}")
+            return "grip_lost", (f"a gripper would have to hold more than {p.holding_force_n:g} N with arm "
+                                 f"{arm + 1} {where}")
+        worst, grip = max(worst, ratio), max(grip, g)
+    q_end = []
+    for k in range(3):
+        hx, hy = xy[new_stance[k]]
+        bx, by = hx - pose_end[0] - offs[k][0], hy - pose_end[1] - offs[k][1]
+        q_end.append(arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch))
+    return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, np.array(q_end))
 
 
 def _around(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float], f: float
