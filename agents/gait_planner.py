@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 from kinegym.envs.climb_task import candidate_holes, hop_counts, stance_hops, start_stances
 from kinegym.envs.sim.climber_model import ClimberModel
-from kinegym.envs.sim.gait import MovePlan, plan_move
+from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
@@ -92,9 +92,10 @@ class GaitPlanner:
                 near = ids if near is None else near & ids
             targets = sorted((near or set()) - set(st))
         out = []
+        rest = rest_pose(self.model, self.holes, st, self.heading)
         for hole in targets:
             for arm in range(3):
-                plan = plan_move(self.model, self.holes, st, arm, hole, self.heading)
+                plan = plan_move(self.model, self.holes, st, arm, hole, self.heading, rest=rest)
                 if isinstance(plan, MovePlan):
                     nxt = list(st)
                     nxt[arm] = hole
@@ -171,7 +172,8 @@ def find_route(model: ClimberModel, holes: HoleMap, start: Sequence[int], goal: 
 class PlannerAgent:
     """The planner as a HoleClimb-v0 policy (the baseline learned policies are compared
     with): at every step it plans from the stance the robot believes it holds, through the
-    moves the env offers, and takes the first move. Replanning absorbs failed moves.
+    moves the env offers, and takes the first move. Moves that failed this episode (the env's
+    ``failed_moves``, which it masks) are dropped from its graph: it replans round them.
 
     ``act(env, obs=None)`` takes the (unwrapped) env; ``None`` when no route exists from here.
     """
@@ -179,19 +181,19 @@ class PlannerAgent:
     def __init__(self, weight: float = 2.0, max_expansions: int = 3000) -> None:
         self.weight, self.max_expansions = weight, max_expansions
         self._planner: GaitPlanner | None = None
-        self._last: tuple[tuple[int, int, int], int, int] | None = None
+        self._forbidden: set[tuple[tuple[int, int, int], int, int]] = set()
 
     def act(self, env: object, obs: object = None) -> int | None:
         holes, model = env.holes, env.model  # type: ignore[attr-defined]
         if self._planner is None or self._planner.holes is not holes or self._planner.model is not model:
             self._planner = GaitPlanner(model, holes, self.weight, candidates=env.K)  # type: ignore[attr-defined]
-            self._last = None
+            self._forbidden = set()
+        for move in env.failed_moves - self._forbidden:  # type: ignore[attr-defined]
+            self._planner.forbid(*move)  # it failed there (the env masks it): plan round it
+            self._forbidden.add(move)
         stance = env.believed_stance  # type: ignore[attr-defined]
-        if self._last is not None and env.last_outcome != "ok" and self._last[0] == stance:  # type: ignore
-            self._planner.forbid(*self._last)  # that move failed here: plan round it
         route = self._planner.plan(stance, env.goal, self.max_expansions)  # type: ignore[attr-defined]
         if not route.found or not route.moves:
             return None
         arm, hole = route.moves[0]
-        self._last = (stance, arm, hole)
         return env.action_for(arm, hole)  # type: ignore[attr-defined]

@@ -23,7 +23,9 @@ As panda-gym splits robot and task, the env is a thin join of :class:`~kinegym.e
 (0, 1, 2 = arms 1, 2, 3) to candidate ``a % K`` - the ``K`` holes nearest the centroid of
 the holes the robot believes it holds, nearest first
 (:func:`kinegym.envs.climb_task.candidate_holes`). Actions the robot's own gait
-model judges infeasible are masked: ``action_masks()`` and ``info["action_mask"]``.
+model judges infeasible, and moves that already failed from the believed stance this
+episode (a failed move leaves the robot on its holes; it remembers the failure and looks for
+another way), are masked: ``action_masks()`` and ``info["action_mask"]``.
 A masked action, an action out of range or of the wrong type (a string, a float, a bool)
 raises :class:`~kinegym.envs.errors.InvalidActionError` naming the valid actions;
 ``masked="fail"`` instead lets a masked move be tried (it fails as ``unreachable`` and
@@ -83,8 +85,11 @@ through the actions the agent is offered (``gymnasium.make`` gives the env the g
 
 ## Episode End
 
-Terminated when an arm grips the goal hole (``info["is_success"] = True``) or the robot
-falls (fewer than two grips). Truncated by ``max_episode_steps`` (200 moves when made with
+Terminated when an arm grips the goal hole (``info["is_success"] = True``), when the robot
+falls (fewer than two grips; ``info["reason"]`` says what gave way), or when no move is left
+to try from where the robot believes it is (the action mask is all False: every move the
+gait model allows from this stance already failed this episode, or it allows none;
+``info["stuck"] = True``). Truncated by ``max_episode_steps`` (200 moves when made with
 ``gymnasium.make``).
 
 ## Arguments
@@ -238,7 +243,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         self._history: list[int] = []
         self._visits: dict[tuple[int, int, int], int] = {self.believed_stance: 1}  # believed stances this episode
         self._failed: set[tuple[tuple[int, int, int], int, int]] = set()  # (stance, arm, hole) that failed
-        self.cand, self.mask = self.robot.options(self.K, self.reach, self.task.stance_cache)
+        self.cand, self.mask = self._options()
         self._done = False
         return self._obs(), self._info()
 
@@ -266,16 +271,26 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         success = self.goal in self.sim.stance and not fell
         reward = self.task.reward(self._prev_dist, dist, success, fell)
         self._prev_dist = dist
-        self.cand, self.mask = self.robot.options(self.K, self.reach, self.task.stance_cache)
+        self.cand, self.mask = self._options()
         obs = self._obs()
-        stuck = not fell and not success and not self.mask.any()  # no move left the model calls feasible
+        stuck = not fell and not success and not self.mask.any()  # no move left to try from here
         self._done = bool(success or fell or stuck)
         if self.render_mode == "human":
             self.render()
         info = self._info(success)
         if stuck:
             info["stuck"] = True
-        return obs, reward, bool(success or fell), stuck, info
+        return obs, reward, self._done, False, info
+
+    def _options(self) -> tuple[list[int], np.ndarray]:
+        """This stance's candidates and mask: the robot's gait model, less the moves that
+        already failed from this (believed) stance this episode - the robot remembers them."""
+        cand, mask = self.robot.options(self.K, self.reach, self.task.stance_cache)
+        stance = self.believed_stance
+        for st, arm, hole in self._failed:
+            if st == stance and hole in cand:
+                mask[arm * self.K + cand.index(hole)] = False
+        return cand, mask
 
     # ------------------------------------------------------------------ observation and info
     def _obs(self) -> np.ndarray:
@@ -343,6 +358,11 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
     def believed_stance(self) -> tuple[int, int, int]:
         """The holes (map rows) the robot believes it holds - what its localiser says."""
         return self.robot.est_holes
+
+    @property
+    def failed_moves(self) -> frozenset[tuple[tuple[int, int, int], int, int]]:
+        """``(believed stance, arm, hole)`` of every move that failed this episode (masked there)."""
+        return frozenset(self._failed)
 
     @property
     def candidates(self) -> list[int]:

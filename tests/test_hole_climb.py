@@ -78,15 +78,16 @@ def test_same_seed_same_actions_same_observations() -> None:
     assert a == b != c
 
 
-def test_observations_are_bit_identical_in_another_process() -> None:
-    here = rollout_digest(gym.make(ENV_ID), 3, 120)
-    code = textwrap.dedent("""
+@pytest.mark.parametrize("mode,steps", [("kinematic", 120), ("physics", 25)])
+def test_observations_are_bit_identical_in_another_process(mode: str, steps: int) -> None:
+    here = rollout_digest(gym.make(ENV_ID, mode=mode), 3, steps)
+    code = textwrap.dedent(f"""
         import sys
         sys.path.insert(0, "tests")
         import gymnasium as gym
         import kinegym
         from test_hole_climb import rollout_digest
-        print(rollout_digest(gym.make("kinegym/HoleClimb-v0"), 3, 120))
+        print(rollout_digest(gym.make("kinegym/HoleClimb-v0", mode="{mode}"), 3, {steps}))
     """)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == here
