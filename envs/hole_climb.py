@@ -116,7 +116,11 @@ steps about twice as fast. Evaluate on fresh walls (``wall_pool=0``).
 * v0 (kinegym 0.1): the first release. Within v0, before 1.0: the observation variants
   became their own ids (``kinegym/HoleClimbMemory-v0``, ``kinegym/HoleClimbMemoryHints-v0``;
   ``memory``/``hints`` are no longer ``gymnasium.make`` arguments of this id), and
-  ``action_masks()`` before ``reset()`` raises ``ResetNeededError``.
+  ``action_masks()`` before ``reset()`` raises ``ResetNeededError``. Then (issue 17) the gait
+  rests on its three holes between moves and its model checks the whole motion (shift paths,
+  the statics along the swing), so masks and poses changed; a move that failed is masked
+  from that stance for the episode, and no move left ends the episode as ``terminated``
+  (``info["stuck"]``; it was ``truncated``).
 """
 
 from __future__ import annotations

@@ -67,8 +67,8 @@ class Agreement:
             out.append(f"- model ok, physics `{outcome}` in the `{phase}`: {k}")
         for (reason, ok), k in sorted(self.kin_no.items()):
             out.append(f"- model `{reason}`, physics {'ok' if ok else 'fails'}: {k}")
-        for why in self.falls:
-            out.append(f"- fall: {why}")
+        for why, k in sorted(Counter(why.split(": ", 1)[0] for why in self.falls).items()):
+            out.append(f"- falls, {why}: {k}")
         return "\n".join(out)
 
 
