@@ -23,7 +23,7 @@ import numpy as np
 import kinegym.configs as _configs
 from kinegym.envs.errors import NoRouteError
 from kinegym.envs.sim.climber_model import ClimberModel
-from kinegym.envs.sim.gait import min_enclosing_circle
+from kinegym.envs.sim.gait import rest_pose
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["ClimbTask", "RouteFinder", "WALL_DEFAULTS", "candidate_holes", "hop_counts", "stance_hops",
@@ -120,23 +120,21 @@ def stance_hops(hops: Sequence[int], stance: Sequence[int]) -> int:
 
 
 def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> list[tuple[int, int, int]]:
-    """Stances near the bottom of the wall the robot can rest in (its three holes fit in its
-    reach), lowest first: the holes within ``rows`` spacings of the lowest hole."""
+    """Stances near the bottom of the wall the robot can rest in (:func:`~kinegym.envs.sim.gait.rest_pose`:
+    its three holes within reach, none under the body), lowest first: the holes within ``rows``
+    spacings of the lowest hole."""
     xy = holes.xy
     y0 = float(xy[:, 1].min())
     low = [i for i in range(len(holes)) if xy[i, 1] <= y0 + rows * holes.spacing]
     reach = min(model.reach[1])
-    clear = model.phys.body_radius_cm + model.phys.reach_margin_cm
     out = []
     low_set = set(low)
     # only triples whose holes are pairwise within two reaches can fit (a wall's bottom row of a
     # hundred holes would otherwise be a million permutations)
     near = {i: [j for j in holes.within(xy[i], 2.0 * reach + 1e-9).tolist() if j in low_set and j != i] for i in low}
     triples = ((i, j, k) for i in low for j, k in itertools.permutations(near[i], 2) if k in near[j])
-    for st in triples:
-        pts = [tuple(xy[h]) for h in st]
-        cx, cy, r = min_enclosing_circle(pts)
-        if r <= reach and all(math.hypot(px - cx, py - cy) >= clear for px, py in pts):
+    for st in triples:  # the robot can rest there: the pose every move starts from
+        if not isinstance(rest_pose(model, holes, st), str):
             out.append((st[0], st[1], st[2]))
     out.sort(key=lambda s: (sum(xy[h, 1] for h in s), s))
     return out
