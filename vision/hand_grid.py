@@ -238,14 +238,15 @@ def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.nd
     for end, nxt, sign in ((q[0], q[1], -1), (q[-1], q[-2], 1)):
         slope = (end[0] - nxt[0]) / (end[1] - nxt[1]) if end[1] != nxt[1] else 0.0
         rows = end[1] + sign * np.arange(1, int(1.5 * hb))
-        rows = rows[(rows >= 0) & (rows < hr)]
+        ri = np.rint(rows).astype(np.intp)  # the rows as indexed: a row at 535.6 is row 536
+        keep = (ri >= 0) & (ri < hr)
+        rows, ri = rows[keep], ri[keep]
         if not len(rows):
             continue
         xc = np.rint(end[0] + slope * (rows - end[1])).astype(np.intp)
         cols = xc[:, None] + np.arange(-r, r + 1)[None, :]
         inside = (cols >= 0) & (cols < wr)
         hit = np.zeros(cols.shape, bool)
-        ri = np.rint(rows).astype(np.intp)
         hit[inside] = rot[np.broadcast_to(ri[:, None], cols.shape)[inside], cols[inside]] > 0
         ink = hit.any(axis=1)
         miss = ~ink
