@@ -188,6 +188,11 @@ class BoardReader:
         erase = cv2.resize(erase_mask(grid, dg), (w, h), interpolation=cv2.INTER_NEAREST)
         clean = d.copy()
         clean[erase > 0] = 0.0
+        if grid.rules is not None:  # ruled paper: what is no darker than its rules, on a rule, is a rule
+            on = cv2.dilate(cv2.resize(grid.rules, (w, h), interpolation=cv2.INTER_NEAREST), np.ones((3, 3))) > 0
+            on &= erase == 0
+            level = float(np.median(d[on])) if on.any() else 1.0
+            clean[on & (d < 2.0 * level)] = 0.0
         # the contrast of real ink: the lines' darkness along their traces
         pts = np.concatenate([tr.dense for tr in grid.cols + grid.rows]) @ to_d[:2, :2].T + to_d[:2, 2]
         line_ref = max(float(np.median(_darkest_near(d, np.rint(pts).astype(np.intp)))), 1e-3)

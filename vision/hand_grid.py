@@ -56,6 +56,7 @@ class Track:
     strength: float
     bands: int
     frame: tuple[np.ndarray, np.ndarray] | None = None  # (turning affine, turned mask) it was traced in
+    ink: float = 0.0  # darkness summed across the stroke (px x darkness), mean over its bands
     dense: np.ndarray | None = None  # traced every 2 px, once chosen
 
     @property
@@ -81,6 +82,7 @@ class HashGrid:
     threshold: float
     score: float
     error_px: float
+    rules: np.ndarray | None = None  # uint8 mask of ruled paper's lines, if the paper is ruled
 
 
 def ink_mask(d: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -156,16 +158,18 @@ def _rotation(phi: float, shape: tuple[int, int]) -> tuple[np.ndarray, tuple[int
     return M, size
 
 
-def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np.ndarray, np.ndarray]:
-    """Tracks of the family running along ``phi``; also the turning affine and the turned mask."""
+def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
+            ) -> tuple[list[Track], np.ndarray, np.ndarray]:
+    """Tracks of the family running along ``phi``; also the turning affine and the turned
+    mask. ``dark`` is the darkness under the mask (float32): a track's ``ink``."""
     M, (wr, hr) = _rotation(phi, mask.shape)
     rot = cv2.warpAffine(mask, M, (wr, hr), flags=cv2.INTER_NEAREST)
     hb = max(4, hr // _BANDS)
     nb = hr // hb
-    prof = rot[: nb * hb].reshape(nb, hb, wr).sum(axis=1, dtype=np.float32)
     ww = max(3, int(round(0.3 * hb)) | 1)
-    prof = cv2.blur(prof, (ww, 1))  # the band's ink within a window: a slanted stroke stays whole
-    prof *= ww  # (sums, not means)
+    prof, dprof = (cv2.blur(m[: nb * hb].reshape(nb, hb, wr).sum(axis=1, dtype=np.float32), (ww, 1)) * ww
+                   for m in (rot, cv2.warpAffine(dark, M, (wr, hr), flags=cv2.INTER_NEAREST)))
+    # (the band's ink within a window - a slanted stroke stays whole - as sums, not means)
     full = hb * width  # a stroke of the family crossing the whole band
     thr = 0.5 * full
     local_max = cv2.dilate(prof, np.ones((1, ww), np.uint8))
@@ -201,10 +205,12 @@ def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np
             tr["k"].append(k)
             tr["x"].append(float(xs[pi]))
             tr["v"].append(float(vals[pi]))
+            tr["d"].append(float(dprof[k, xs[pi]]))
             used_t.add(ti)
             taken[pi] = True
         for pi in np.flatnonzero(~taken):
-            active.append({"k": [k], "x": [float(xs[pi])], "v": [float(vals[pi])], "slope": 0.0})
+            active.append({"k": [k], "x": [float(xs[pi])], "v": [float(vals[pi])], "d": [float(dprof[k, xs[pi]])],
+                           "slope": 0.0})
         still = []
         for tr in active:
             (still if k - tr["k"][-1] <= 2 else done).append(tr)
@@ -223,8 +229,48 @@ def _tracks(mask: np.ndarray, phi: float, width: float) -> tuple[list[Track], np
         cover = len(tr["k"]) / (tr["k"][-1] - tr["k"][0] + 1)
         if cover < 0.6:
             continue
-        out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full) * cover, len(tr["k"])))
+        out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full) * cover, len(tr["k"]),
+                         ink=float(np.mean(tr["d"])) / hb))
     return out, M, rot
+
+
+def _is_ruled(tracks: list[Track], side: float) -> bool:
+    """Ruled or graph paper in this family: eight or more long lines of one direction, most
+    of them evenly spaced (a '#' has two lines a way, a frame two more, a second grid or a
+    page edge a few)."""
+    long = [t for t in tracks if t.span >= 0.25 * side]
+    if len(long) < 8:
+        return False
+    u = np.array([t.pts[-1] - t.pts[0] for t in long])
+    u = u * np.where(u[:, 1:2] < 0, -1.0, 1.0)  # one sense along the family
+    u = np.median(u / np.hypot(u[:, :1], u[:, 1:]), axis=0)
+    gaps = np.diff(np.sort([float(np.mean(t.pts, axis=0) @ [-u[1], u[0]]) for t in long]))
+    return bool(np.mean(np.abs(gaps - np.median(gaps)) <= 0.3 * np.median(gaps)) >= 0.5)
+
+
+def _without_rules(tracks: list[Track], side: float) -> list[Track]:
+    """A ruled family's tracks less the printed rules: the grid is drawn with more ink, so
+    only tracks with at least 1.5x the median ink of the long ones stay. With fewer than two
+    long tracks left the family is kept as it is."""
+    if not _is_ruled(tracks, side):
+        return tracks
+    ink = float(np.median([t.ink for t in tracks if t.span >= 0.25 * side]))
+    keep = [t for t in tracks if t.ink >= 1.5 * ink]
+    return keep if sum(t.span >= 0.25 * side for t in keep) >= 2 else tracks
+
+
+def _rules(mask: np.ndarray, phis: list[float], length: int) -> np.ndarray:
+    """uint8 mask of the ink that lies on straight runs ``length`` px long along any of the
+    directions ``phis`` (or up to 8 deg off them: perspective makes rules converge): ruled
+    paper's lines (openings with a line)."""
+    out = np.zeros_like(mask)
+    r = length // 2
+    for phi in (p + math.radians(t) for p in phis for t in (-8, -4, 0, 4, 8)):  # perspective turns them
+        k = np.zeros((2 * r + 1, 2 * r + 1), np.uint8)
+        dx, dy = r * math.cos(phi), r * math.sin(phi)
+        cv2.line(k, (int(round(r - dx)), int(round(r - dy))), (int(round(r + dx)), int(round(r + dy))), 1, 1)
+        out |= cv2.morphologyEx(mask, cv2.MORPH_OPEN, k)
+    return out
 
 
 def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.ndarray:
@@ -403,11 +449,17 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
     phi_a, phi_b = _directions(mask, width)
-    fa, Ma, rot_a = _tracks(mask, phi_a, width)
-    fb, Mb, rot_b = _tracks(mask, phi_b, width)
-    for tr in fa:
+    dark = np.where(mask > 0, d, 0.0).astype(np.float32)
+    fa, Ma, rot_a = _tracks(mask, phi_a, width, dark)
+    fb, Mb, rot_b = _tracks(mask, phi_b, width, dark)
+    side = float(max(d.shape))
+    all_a, all_b = fa, fb
+    fa, fb = _without_rules(fa, side), _without_rules(fb, side)
+    ruled = [phi for phi, fam in ((phi_a, all_a), (phi_b, all_b)) if _is_ruled(fam, side)]
+    rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
+    for tr in all_a:
         tr.frame = (Ma, rot_a)
-    for tr in fb:
+    for tr in all_b:
         tr.frame = (Mb, rot_b)
     # the longest few of each family (symbol strokes make short tracks)
     fa = sorted(fa, key=lambda tr: -tr.span * tr.strength)[:7]
@@ -452,7 +504,7 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
         raise NoBoardError("the '#' crossings do not make a projective grid")
     p = np.concatenate([lat, np.ones((len(lat), 1))], axis=1) @ H.T
     err = float(np.sqrt(np.mean(np.sum((p[:, :2] / p[:, 2:3] - img) ** 2, axis=1))))
-    return HashGrid(n, H, cols, rows, pts, width, t, float(score), err)
+    return HashGrid(n, H, cols, rows, pts, width, t, float(score), err, rules)
 
 
 def _dense(tr: Track, width: float) -> np.ndarray:
