@@ -173,18 +173,28 @@ class Camera:
         lo, hi = r
         return float(lo if lo == hi else self.rng.uniform(lo, hi))
 
-    def photograph(self, canvas: BoardCanvas, aim_cm: object | None = None) -> Photo:
-        """One photo of ``canvas`` aimed near ``aim_cm`` (default: the canvas centre)."""
+    def pose(self, aim_cm: object) -> tuple[np.ndarray, dict[str, Any]]:
+        """Draw a camera pose aimed near ``aim_cm``: the homography board cm -> image px and
+        the sampled values. Cheap: a caller can search poses before rendering one."""
         s, rng = self.spec, self.rng
-        w, h = s.image_size
-        aim = np.asarray(aim_cm if aim_cm is not None else (canvas.width_cm / 2, canvas.height_cm / 2), float)
-        aim = aim + (rng.normal(0, s.aim_jitter_cm / 2, 2) if s.aim_jitter_cm else 0.0)
+        aim = np.asarray(aim_cm, float) + (rng.normal(0, s.aim_jitter_cm / 2, 2) if s.aim_jitter_cm else 0.0)
         st = {
             "distance_cm": self._u(s.distance_cm), "tilt_deg": self._u(s.tilt_deg),
             "azimuth_deg": float(rng.uniform(0, 360)), "roll_deg": self._u(s.roll_deg),
         }
         H = look_at_homography(aim, st["distance_cm"], st["tilt_deg"], st["azimuth_deg"], st["roll_deg"],
-                               (w, h), s.fov_deg)
+                               s.image_size, s.fov_deg)
+        return H, st
+
+    def photograph(self, canvas: BoardCanvas, aim_cm: object | None = None,
+                   pose: tuple[np.ndarray, dict[str, Any]] | None = None) -> Photo:
+        """One photo of ``canvas`` aimed near ``aim_cm`` (default: the canvas centre), or
+        taken from ``pose`` (a :meth:`pose` drawn before)."""
+        s, rng = self.spec, self.rng
+        w, h = s.image_size
+        aim = aim_cm if aim_cm is not None else (canvas.width_cm / 2, canvas.height_cm / 2)
+        H, st = pose if pose is not None else self.pose(aim)
+        st = dict(st)
         M = H @ canvas.px_to_cm()
         board = cv2.warpPerspective(canvas.image(), M, (w, h), flags=cv2.INTER_LINEAR,
                                     borderMode=cv2.BORDER_CONSTANT, borderValue=(0, 0, 0)).astype(np.float32)

@@ -292,18 +292,23 @@ def real_like_scene(seed: int | np.random.Generator | None = None, width: int | 
     corners = np.array([[box[0], box[1]], [box[2], box[1]], [box[2], box[3]], [box[0], box[3]]])
     w, h = frame
     cut = rng.random() < 0.2
-    for _ in range(40):  # every cell in view; sometimes the lines run out of the frame
-        aim = centre + (rng.normal(0, 0.3 * c, 2) if cut else 0.0)
-        photo = cam.photograph(canvas, aim)
-        cpx = photo.project(centres_cm)
-        reach = photo.project(centres_cm + np.array([0.3 * c, 0.0])) - cpx
-        m = np.linalg.norm(reach, axis=-1)[..., None]
-        inside = np.all((cpx - m > 0) & (cpx + m < [w, h]))
-        gpx = photo.project(corners)
-        whole = np.all((gpx > 0) & (gpx < [w, h]))
-        if inside and (cut or whole):
+    fallback, whole = None, False
+    for _ in range(60):  # every cell in view; with ``cut`` the lines run out of the frame
+        pose = cam.pose(centre + (rng.normal(0, 0.6 * c, 2) if cut else 0.0))
+        project = Photo(np.zeros((1, 1, 3), np.uint8), pose[0]).project
+        cpx = project(centres_cm)
+        reach = np.linalg.norm(project(centres_cm + np.array([0.3 * c, 0.0])) - cpx, axis=-1)[..., None]
+        if not np.all((cpx - reach > 0) & (cpx + reach < [w, h])):
+            continue
+        gpx = project(corners)
+        whole = bool(np.all((gpx > 0) & (gpx < [w, h])))
+        fallback = fallback or (pose, cpx, whole)
+        if whole != cut:
             break
-    notes["cut_off"] = not bool(whole)
+    else:
+        pose, cpx, whole = fallback if fallback is not None else (pose, cpx, whole)
+    photo = cam.photograph(canvas, pose=pose)
+    notes["cut_off"] = not whole
     img = _light(photo.image.astype(np.float32), rng, surface == "whiteboard", notes)
     scale = w / 640.0
     img = cv2.GaussianBlur(img, (0, 0), float(rng.uniform(0.4, 1.4)) * max(1.0, 0.7 * scale))
