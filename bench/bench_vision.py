@@ -13,7 +13,10 @@ Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
   highlighter scribbles.
 * ``hard 3x3`` and ``lab 5x5`` (the thesis's set-up: camera on a stand, black pen).
 
-Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px.
+Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px,
+and the real-like set (:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3
+boards on paper, whiteboards, graph and notebook paper, 520-4,000 px; seeds 20,000 on), per
+surface and per photo size, read as the game reads them (``BoardReader(size=3)``).
 
 Per set: cells right, whole boards right, X-vs-O right among cells both call marked,
 boards refused (NoBoardError), and the reader's time per frame (median, p95). The seed's
@@ -92,6 +95,47 @@ def main() -> None:
             print(f"| {name} | {label} | {r[0] / (count * n * n):.2%} | {r[1] / count:.1%} | "
                   f"{r[3] / max(r[2], 1):.2%} | {r[4]} | {ms} |", flush=True)
     real_photos()
+    real_like(count)
+
+
+def real_like(count: int) -> None:
+    """The real-like set: per surface and in all, cells and boards right, X vs O, refusals,
+    and the reader's time by photo width."""
+    from kinegym.envs.sim.scenes_real import real_like_scene
+
+    reader = BoardReader(size=3)
+    rows: dict[str, list] = {}
+    for i in range(count):
+        sc = real_like_scene(20_000 + i)
+        t0 = time.perf_counter()
+        try:
+            got = reader.read(sc.image).cells
+        except NoBoardError:
+            got = None
+        dt = (time.perf_counter() - t0) * 1e3
+        w = int(sc.notes["width"])
+        for key in (f"{sc.notes['surface']}", "all", "width <= 960" if w <= 960 else "width 1,280-2,048"
+                    if w <= 2048 else "width 3,000-4,000"):
+            rows.setdefault(key, []).append((got, sc.cells, dt))
+    print(f"\n{count} real-like photos (3 x 3, seeds 20,000 on)")
+    print("| real-like | photos | cells right | boards right | X vs O right | refused | ms per frame median / p95 |")
+    print("|---|---|---|---|---|---|---|")
+    order = ("paper", "whiteboard", "graph", "notebook", "width <= 960", "width 1,280-2,048", "width 3,000-4,000",
+             "all")
+    for key in [k for k in order if k in rows]:
+        res = rows[key]
+        cells = boards = both = xo = refused = 0
+        for got, truth, _ in res:
+            if got is None:
+                refused += 1
+                continue
+            ok = got == truth
+            cells, boards = cells + int(ok.sum()), boards + bool(ok.all())
+            marked = (got > 0) & (truth > 0)
+            both, xo = both + int(marked.sum()), xo + int((marked & ok).sum())
+        t = np.array([r[2] for r in res])
+        print(f"| {key} | {len(res)} | {cells / (9 * len(res)):.1%} | {boards / len(res):.1%} | "
+              f"{xo / max(both, 1):.1%} | {refused} | {np.median(t):.1f} / {np.percentile(t, 95):.1f} |", flush=True)
 
 
 def real_photos() -> None:
