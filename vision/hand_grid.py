@@ -249,11 +249,9 @@ def _is_ruled(tracks: list[Track], side: float) -> bool:
 
 
 def _without_rules(tracks: list[Track], side: float) -> list[Track]:
-    """A ruled family's tracks less the printed rules: the grid is drawn with more ink, so
-    only tracks with at least 1.5x the median ink of the long ones stay. With fewer than two
-    long tracks left the family is kept as it is."""
-    if not _is_ruled(tracks, side):
-        return tracks
+    """A ruled family's tracks (:func:`_is_ruled`) less the printed rules: the grid is drawn
+    with more ink, so only tracks with at least 1.5x the median ink of the long ones stay.
+    With fewer than two long tracks left the family is kept as it is."""
     ink = float(np.median([t.ink for t in tracks if t.span >= 0.25 * side]))
     keep = [t for t in tracks if t.ink >= 1.5 * ink]
     return keep if sum(t.span >= 0.25 * side for t in keep) >= 2 else tracks
@@ -454,9 +452,11 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     fb, Mb, rot_b = _tracks(mask, phi_b, width, dark)
     side = float(max(d.shape))
     all_a, all_b = fa, fb
-    fa, fb = _without_rules(fa, side), _without_rules(fb, side)
-    ruled = [phi for phi, fam in ((phi_a, all_a), (phi_b, all_b)) if _is_ruled(fam, side)]
+    ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
+    ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
+    fa = _without_rules(fa, side) if ruled_a else fa
+    fb = _without_rules(fb, side) if ruled_b else fb
     for tr in all_a:
         tr.frame = (Ma, rot_a)
     for tr in all_b:
