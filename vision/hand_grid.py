@@ -17,7 +17,9 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
    across it; in each band a stroke of that family is a peak of the ink summed along the
    band (strokes of the other family spread flat). Peaks are linked from band to band,
    allowing drift (perspective, waves) and gaps (faint or broken pen): a track is a
-   polyline that may bend.
+   polyline that may bend. A family of eight or more evenly spaced long tracks is ruled or
+   graph paper: only tracks with 1.5x the rules' ink stay candidates, and the rules' ink
+   (:attr:`HashGrid.rules`) is cleared from the cells unless it is twice as dark.
 4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
    pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
    in size, and each line should run on past its outer crossings (the outer cells). The
@@ -450,17 +452,16 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     dark = np.where(mask > 0, d, 0.0).astype(np.float32)
     fa, Ma, rot_a = _tracks(mask, phi_a, width, dark)
     fb, Mb, rot_b = _tracks(mask, phi_b, width, dark)
+    for tr in fa:
+        tr.frame = (Ma, rot_a)
+    for tr in fb:
+        tr.frame = (Mb, rot_b)
     side = float(max(d.shape))
-    all_a, all_b = fa, fb
     ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
     fa = _without_rules(fa, side) if ruled_a else fa
     fb = _without_rules(fb, side) if ruled_b else fb
-    for tr in all_a:
-        tr.frame = (Ma, rot_a)
-    for tr in all_b:
-        tr.frame = (Mb, rot_b)
     # the longest few of each family (symbol strokes make short tracks)
     fa = sorted(fa, key=lambda tr: -tr.span * tr.strength)[:7]
     fb = sorted(fb, key=lambda tr: -tr.span * tr.strength)[:7]
