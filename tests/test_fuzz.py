@@ -62,6 +62,16 @@ def _run(argv: list[str], limit_s: float = 30.0) -> tuple[int, str]:
     return code, out.getvalue() + err.getvalue()
 
 
+@pytest.fixture(scope="module", autouse=True)
+def scratch_cwd(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """Every case runs in a scratch folder: a fuzzed relative ``--out`` (``calibrate --out
+    <random text>`` is a valid file name) must land there, never in the user's checkout."""
+    here = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("cwd"))
+    yield
+    os.chdir(here)
+
+
 @pytest.fixture(scope="module")
 def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     d = tmp_path_factory.mktemp("hostile")
