@@ -168,6 +168,9 @@ def write_atomic(path: str | Path, data: bytes | str, suffixes: Sequence[str] | 
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
         with os.fdopen(fd, "wb") as fh:
+            umask = os.umask(0)  # mkstemp makes the file private (0600); give it the mode open() would
+            os.umask(umask)
+            os.fchmod(fh.fileno(), 0o666 & ~umask)
             fh.write(payload)
             fh.flush()
             os.fsync(fh.fileno())

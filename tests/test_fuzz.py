@@ -114,6 +114,11 @@ def test_the_yaml_loader_refuses_bombs_binary_and_oversize(tmp_path: Path) -> No
 def test_the_writer_is_atomic_and_names_bad_paths(tmp_path: Path) -> None:
     out = write_atomic(tmp_path / "new" / "deep" / "a.txt", "hello")
     assert out.read_text() == "hello" and not [p for p in out.parent.iterdir() if p.name.startswith(".")]
+    umask = os.umask(0o022)
+    try:  # the mode a plain open() gives, not mkstemp's private 0600
+        assert write_atomic(tmp_path / "b.txt", "x").stat().st_mode & 0o777 == 0o644
+    finally:
+        os.umask(umask)
     (tmp_path / "plain").write_text("x")
     for bad, needle in ((tmp_path / "plain" / "a.txt", "is a file"), (tmp_path / "new", "a folder"),
                         (tmp_path / "x.bmp", "extension")):
