@@ -87,18 +87,18 @@ class HashGrid:
     rules: np.ndarray | None = None  # uint8 mask of ruled paper's lines, if the paper is ruled
 
 
-def ink_mask(d: np.ndarray) -> tuple[np.ndarray, float, float]:
+def ink_mask(d: np.ndarray, share: float = 0.22) -> tuple[np.ndarray, float, float]:
     """The ink mask of a darkness map (uint8 0/1), its threshold and the stroke width (px).
 
-    The threshold is the larger of the map's noise level (median + 6 robust sigmas) and 22 %
-    of its strong ink (the 99.7th percentile); a pixel joins the mask also at 60 % of that
+    The threshold is the larger of the map's noise level (median + 6 robust sigmas) and
+    ``share`` of its strong ink (the 99.7th percentile); a pixel joins the mask also at 60 % of that
     level when it touches a pixel above it (hysteresis: a faint stretch of a line stays
     connected)."""
     sample = d[::2, ::2].ravel()
     med = float(np.median(sample))
     mad = float(np.median(np.abs(sample - med))) * 1.4826
     top = float(np.percentile(sample, 99.7))
-    t = max(med + 6.0 * mad, 0.22 * top, 0.035)
+    t = max(med + 6.0 * mad, share * top, 0.035)
     hi = (d > t).astype(np.uint8)
     lo = (d > 0.6 * t).astype(np.uint8)
     # hysteresis: low pixels within a pixel of high ones
@@ -444,8 +444,20 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
 
 def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
-    :class:`NoBoardError` when no two families of crossing strokes form one."""
-    mask, t, width = ink_mask(d)
+    :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
+    threshold is first 22 % of the strongest ink (:func:`ink_mask`); when that finds no '#',
+    all ink above the noise is searched (pale grid lines beside black marks)."""
+    try:
+        return _find_hash_grid(d, sizes, 0.22)
+    except NoBoardError as first:
+        try:
+            return _find_hash_grid(d, sizes, 0.0)
+        except NoBoardError:
+            raise first from None
+
+
+def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float) -> HashGrid:
+    mask, t, width = ink_mask(d, share)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
     phi_a, phi_b = _directions(mask, width)
