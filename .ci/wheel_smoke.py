@@ -3,7 +3,7 @@
 
 Called by ``.ci/run`` as ``python wheel_smoke.py`` from that folder. Exits non-zero (with the
 reason) when the user's packages shadow ours or ours shadow theirs, an environment cannot be
-made, reset and stepped, the opening book is missing from the wheel, or the CLI fails.
+made, reset and stepped, the opening book or the reader's cell model is missing from the wheel, or the CLI fails.
 """
 
 from __future__ import annotations
@@ -59,7 +59,15 @@ got = json.loads(out.stdout)
 assert got["source"] == "book" and secs < 20, f"kinegym solve on the empty 5x5 board: {got['source']}, {secs:.1f} s"
 print(f"kinegym solve, empty 5x5: {got['outcome']} for X from the {got['source']} in {secs:.1f} s")
 
+from kinegym.envs.sim.scenes import random_scene  # noqa: E402
+from kinegym.vision.board_reader import BoardReader  # noqa: E402
+
+scene = random_scene(7, n=3, difficulty="default")
+read = BoardReader(size=3).read(scene.photo.image)  # loads the trained cell model shipped in the wheel
+assert (read.cells == scene.cells).all(), f"the wheel's reader misread a lab board: {read.text()}"
+print(f"board reader with the shipped cell model: read {read.text()}")
+
 out = subprocess.run([str(exe), "--help"], capture_output=True, text=True, timeout=60)
 assert out.returncode == 0 and "demo" in out.stdout, f"kinegym --help failed: {out.stderr}"
 print("kinegym --help: ok")
-print("wheel smoke: 4 passed, 0 failed")
+print("wheel smoke: 5 passed, 0 failed")

@@ -16,7 +16,8 @@ Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
 Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px,
 and the real-like set (:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3
 boards on paper, whiteboards, graph and notebook paper, 520-4,000 px; seeds 20,000 on), per
-surface and per photo size, read as the game reads them (``BoardReader(size=3)``).
+surface and per photo size, read as the game reads them (``BoardReader(size=3)``, with the
+shipped cell classifier), and beside it what the hand rule alone would have called.
 
 Per set: cells right, whole boards right, X-vs-O right among cells both call marked,
 boards refused (NoBoardError), and the reader's time per frame (median, p95). The seed's
@@ -113,29 +114,38 @@ def real_like(count: int) -> None:
         except NoBoardError:
             got = None
         dt = (time.perf_counter() - t0) * 1e3
+        trace: dict[str, object] = {}
+        try:  # the hand rule alone, for comparison (its probabilities are among the model's inputs)
+            reader.read(sc.image, trace)
+            rule = np.asarray(trace["cell_inputs"])[:, -4:-1].argmax(axis=1).reshape(3, 3)
+        except NoBoardError:
+            rule = None
         w = int(sc.notes["width"])
         for key in (f"{sc.notes['surface']}", "all", "width <= 960" if w <= 960 else "width 1,280-2,048"
                     if w <= 2048 else "width 3,000-4,000"):
-            rows.setdefault(key, []).append((got, sc.cells, dt))
+            rows.setdefault(key, []).append((got, sc.cells, dt, rule))
     print(f"\n{count} real-like photos (3 x 3, seeds 20,000 on)")
-    print("| real-like | photos | cells right | boards right | X vs O right | refused | ms per frame median / p95 |")
-    print("|---|---|---|---|---|---|---|")
+    print("| real-like | photos | cells right | boards right | X vs O right | refused | ms per frame median / p95 "
+          "| hand rule alone: cells / boards |")
+    print("|---|---|---|---|---|---|---|---|")
     order = ("paper", "whiteboard", "graph", "notebook", "width <= 960", "width 1,280-2,048", "width 3,000-4,000",
              "all")
     for key in [k for k in order if k in rows]:
         res = rows[key]
-        cells = boards = both = xo = refused = 0
-        for got, truth, _ in res:
+        cells = boards = both = xo = refused = rule_cells = rule_boards = 0
+        for got, truth, _, rule in res:
             if got is None:
                 refused += 1
                 continue
+            rule_cells, rule_boards = rule_cells + int((rule == truth).sum()), rule_boards + bool((rule == truth).all())
             ok = got == truth
             cells, boards = cells + int(ok.sum()), boards + bool(ok.all())
             marked = (got > 0) & (truth > 0)
             both, xo = both + int(marked.sum()), xo + int((marked & ok).sum())
         t = np.array([r[2] for r in res])
         print(f"| {key} | {len(res)} | {cells / (9 * len(res)):.1%} | {boards / len(res):.1%} | "
-              f"{xo / max(both, 1):.1%} | {refused} | {np.median(t):.1f} / {np.percentile(t, 95):.1f} |", flush=True)
+              f"{xo / max(both, 1):.1%} | {refused} | {np.median(t):.1f} / {np.percentile(t, 95):.1f} | "
+              f"{rule_cells / (9 * len(res)):.1%} / {rule_boards / len(res):.1%} |", flush=True)
 
 
 def real_photos() -> None:

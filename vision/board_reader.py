@@ -28,7 +28,10 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    ghosts of erased games fall below it), and two shape features that do not depend on
    the symbol's rotation, size or placement in the cell - ink at the centre of the mark
    (an X crosses there, an O is hollow) and an enclosed hole (an O encloses one, an X
-   does not). A logistic rule turns them into probabilities.
+   does not). A logistic rule turns them into probabilities; a small trained network
+   (:mod:`~kinegym.vision.cell_model`, shipped with the package) reads the cell's pooled ink
+   and those features and gives the calibrated probabilities the reader returns (``model=None``
+   keeps the rule's).
 
 **Hand-drawn grids.** When no field of straight lines shows (a real person's '#': wavy,
 converging lines, no frame, one line stopping at a crossing, pale or coloured pen), the grid
@@ -57,6 +60,7 @@ import math
 import cv2
 import numpy as np
 
+from .cell_model import SHIPPED_MODEL, CellModel, cell_inputs
 from .cells import _probabilities, _remove_grid_lines, board_features
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
@@ -110,10 +114,12 @@ class BoardReader:
         cell_px: side of a rectified cell (px) for the cell features.
         max_side_px: larger images are shrunk to this longer side first (speed).
         grid_px: the grid is searched on a copy shrunk to about this longer side.
+        model: the cell classifier - a :class:`CellModel`, the path of one, ``"shipped"``
+            (the package's) or None for the hand rule alone.
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
-                 grid_px: int = 400) -> None:
+                 grid_px: int = 400, model: CellModel | str | None = "shipped") -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
@@ -124,6 +130,12 @@ class BoardReader:
         self.cell_px = int(cell_px)
         self.max_side_px = int(max_side_px)
         self.grid_px = int(grid_px)
+        if model is not None and not isinstance(model, CellModel):
+            if self.cell_px != 40:  # the shipped model was trained on 40 px cells
+                raise VisionError(f"cell_px={cell_px!r} with a trained cell model; the model reads 40 px cells "
+                                  "(pass model=None for the hand rule at other sizes)")
+            model = CellModel.load(SHIPPED_MODEL if model == "shipped" else model)
+        self.model = model
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
@@ -151,17 +163,19 @@ class BoardReader:
             H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
             err *= g
             line_ref, _ = self._line_contrast(d, H, n)
-            probs, feats = self._read_cells(d, H, n, line_ref)
+            probs, feats, inputs = self._read_cells(d, H, n, line_ref)
         except NoBoardError as straight:  # then a hand-drawn '#': wavy, converging, unframed lines
             if trace is not None:  # the straight-line attempt's lines are not what was read
                 for key in ("lines", "cols", "rows", "lattice", "nodes", "extension"):
                     trace.pop(key, None)
             try:
-                H, err, npts, frame, n, probs, feats = self._read_hash(rgb, d, trace)
+                H, err, npts, frame, n, probs, feats, inputs = self._read_hash(rgb, d, trace)
             except NoBoardError as hand:
                 raise NoBoardError(f"{straight.reason}; as a hand-drawn '#': {hand.reason}") from None
         if trace is not None and "hash_to_px" in trace:  # the '#' was read: its px to the image's
             trace["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ trace["hash_to_px"]
+        if trace is not None:
+            trace["cell_inputs"] = inputs
         cells = probs.argmax(axis=-1)
         conf = probs.max(axis=-1)
         if scale < 1.0:
@@ -171,7 +185,8 @@ class BoardReader:
 
     # -- hand-drawn '#' -------------------------------------------------------------
     def _read_hash(self, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object] | None
-                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray]:
+                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray,
+                              np.ndarray]:
         """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found in
         the ink of a copy of the photo :data:`GRID_SIDE_PX` on its longer side (the same scale
         whatever the camera), its lines erased from the ink ``d``, the cells read with the
@@ -206,9 +221,9 @@ class BoardReader:
         k = int(step / self.cell_px)
         if k >= 2:
             clean = cv2.dilate(clean, np.ones((k, k), np.uint8))
-        probs, feats = self._read_cells(clean, H, grid.n, line_ref, floor=floor, margin_cells=1.0, outer=0.9)
+        probs, feats, inputs = self._read_cells(clean, H, grid.n, line_ref, floor=floor, margin_cells=1.0, outer=0.9)
         npts = int(grid.crossings.shape[0] * grid.crossings.shape[1])
-        return H, grid.error_px * fx, npts, (False, False, False, False), grid.n, probs, feats
+        return H, grid.error_px * fx, npts, (False, False, False, False), grid.n, probs, feats, inputs
 
     # -- grid ------------------------------------------------------------------------
     def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None
@@ -560,11 +575,11 @@ class BoardReader:
 
     # -- cells -----------------------------------------------------------------------
     def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float, floor: float | None = None,
-                    margin_cells: float = 0.5, outer: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Cell probabilities and features. ``floor``: the image's own ink level (noise), which
-        replaces the fixed floors for faint pens; ``margin_cells`` of the map around the field
-        are rectified too (marks that cross the border stay whole), of which ``outer`` cells
-        count for the outer cells."""
+                    margin_cells: float = 0.5, outer: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cell probabilities, features and the classifier's inputs (:func:`cell_inputs`).
+        ``floor``: the image's own ink level (noise), which replaces the fixed floors for faint
+        pens; ``margin_cells`` of the map around the field are rectified too (marks that cross
+        the border stay whole), of which ``outer`` cells count for the outer cells."""
         s = self.cell_px
         o = int(round(margin_cells * s))
         # rectified px -> grid cells, with the margin
@@ -575,4 +590,7 @@ class BoardReader:
         present, mark = (0.12, 0.1) if floor is None else (floor, floor)
         rect = _remove_grid_lines(rect, n, s, o, max(present, 0.4 * line_ref))
         feats = board_features(rect, n, s, o, max(mark, 0.25 * line_ref), 0.25 * line_ref, outer)
-        return _probabilities(feats, line_ref), feats
+        rule = _probabilities(feats, line_ref)
+        x = cell_inputs(rect, n, s, o, feats, rule, line_ref, outer)
+        probs = rule if self.model is None else self.model.probs(x).reshape(n, n, 3)
+        return probs, feats, x

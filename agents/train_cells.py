@@ -1,0 +1,266 @@
+"""Train the board reader's cell classifier (:mod:`kinegym.vision.cell_model`) on rendered photos.
+
+``python -m kinegym.agents.train_cells --out vision/data/cell_model.npz`` renders photos, reads
+each with the hand rule, and keeps the cells of every board whose grid was found right (each
+true cell centre falls in its own cell; the classifier cannot mend a wrong grid). It then:
+
+1. splits the photos (never the cells of one photo) into training and held-out parts;
+2. fits the network by Adam on the training cells and their 8 rotations and mirror images
+   (:func:`~kinegym.vision.cell_model.dihedral`), weight decay against over-fitting;
+3. fits the softmax temperature on the held-out cells (least negative log-likelihood), so the
+   confidences are calibrated, and reports accuracy and expected calibration error (ECE)
+   before and after.
+
+Photos: real-like 3 x 3 boards (:func:`~kinegym.envs.sim.scenes_real.real_like_scene`, seeds
+from 1,000,000) and hard rendered 3 x 3 and 5 x 5 boards
+(:func:`~kinegym.envs.sim.scenes.random_scene`, seeds from 2,000,000); the benchmark's seeds
+(below 500,000) are never trained on. The same arguments give the same model, bit for bit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinegym.vision.board_reader import BoardReader, NoBoardError
+from kinegym.vision.cell_model import N_INPUTS, SHIPPED_MODEL, CellModel, dihedral
+from kinegym.vision.ink import _apply
+
+__all__ = ["CellData", "grid_is_right", "collect", "fit", "expected_calibration_error", "main"]
+
+REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
+
+
+class _Ticker:
+    """A line on stderr at every tenth of ``total`` (agents may not import kinegym's progress bar)."""
+
+    def __init__(self, total: int, what: str, enabled: bool) -> None:
+        self.total, self.what, self.enabled, self.done, self.t0 = max(total, 1), what, enabled, 0, time.perf_counter()
+
+    def update(self) -> None:
+        self.done += 1
+        if self.enabled and (self.done * 10 // self.total > (self.done - 1) * 10 // self.total):
+            print(f"  {self.what}: {self.done}/{self.total}, {time.perf_counter() - self.t0:.0f} s", file=sys.stderr,
+                  flush=True)
+
+
+@dataclass
+class CellData:
+    """Cells with their truth: inputs ``x`` ``(N, N_INPUTS)``, labels ``y`` (0 empty, 1 X, 2 O)
+    and ``photo`` (which photo each came from); ``kept`` / ``photos``: photos whose grid was right."""
+
+    x: np.ndarray
+    y: np.ndarray
+    photo: np.ndarray
+    kept: int
+    photos: int
+
+
+def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
+    """Render one photo, read it with the hand rule; its cells' inputs and truth, or None when
+    no grid or a wrong one was found."""
+    kind, seed = job
+    if kind == "real-like":
+        from kinegym.envs.sim.scenes_real import real_like_scene
+
+        sc = real_like_scene(seed)
+        n, truth, centres, image = 3, sc.cells, sc.centres_px.reshape(-1, 2), sc.image
+    else:
+        from kinegym.envs.sim.scenes import random_scene
+
+        rng = np.random.default_rng(seed)
+        n = int(rng.choice([3, 5]))
+        hs = random_scene(rng, n=n, difficulty="hard", distractors=bool(rng.random() < 0.5))
+        rc = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), -1).reshape(-1, 2)
+        # the canvas's y runs up the page: row 0, on top, is the highest
+        centres = hs.photo.project(hs.origin_cm + np.stack([rc[:, 1] + 0.5, n - rc[:, 0] - 0.5], 1) * hs.cell_cm)
+        truth, image = hs.cells, hs.photo.image
+    trace: dict[str, object] = {}
+    try:
+        reading = BoardReader(size=n, model=None).read(image, trace)
+    except NoBoardError:
+        return None
+    if not grid_is_right(reading.homography, centres, n):
+        return None
+    return np.asarray(trace["cell_inputs"], np.float32), truth.reshape(-1).astype(np.int64)
+
+
+def grid_is_right(homography: np.ndarray, centres: np.ndarray, n: int) -> bool:
+    """Whether a reading's grid (``homography``: cells to px) puts every true cell centre
+    (``centres`` ``(n * n, 2)`` px, row by row) in its own cell, outer cells reaching up to 0.9
+    of a cell past the field."""
+    g = _apply(np.linalg.inv(homography), centres)
+    rc = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), -1).reshape(-1, 2)
+    inside = bool((g > -0.9).all() and (g < n + 0.9).all())
+    return inside and bool((np.clip(np.floor(g[:, ::-1]), 0, n - 1) == rc).all())
+
+
+def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) -> CellData:
+    """The cells of ``real_like`` + ``hard`` photos (module docstring), read in ``workers``
+    processes; the order, and so the data, does not depend on ``workers``."""
+    jobs = [("real-like", REAL_LIKE_SEED + i) for i in range(real_like)] + [("hard", HARD_SEED + i)
+                                                                           for i in range(hard)]
+    xs, ys, ids = [], [], []
+    bar = _Ticker(len(jobs), "photos", progress)
+    results = []
+    if workers > 1:
+        with mp.get_context("spawn").Pool(workers) as pool:
+            for res in pool.imap(_scene_cells, jobs, chunksize=4):
+                results.append(res)
+                bar.update()
+    else:
+        for job in jobs:
+            results.append(_scene_cells(job))
+            bar.update()
+    for k, res in enumerate(results):
+        if res is not None:
+            xs.append(res[0])
+            ys.append(res[1])
+            ids.append(np.full(len(res[1]), k))
+    if not xs:
+        return CellData(np.zeros((0, N_INPUTS), np.float32), np.zeros(0, np.int64), np.zeros(0, np.int64), 0,
+                        len(jobs))
+    return CellData(np.concatenate(xs), np.concatenate(ys), np.concatenate(ids), len(xs), len(jobs))
+
+
+def _softmax(z: np.ndarray) -> np.ndarray:
+    z = np.exp(z - z.max(axis=1, keepdims=True))
+    return z / z.sum(axis=1, keepdims=True)
+
+
+def expected_calibration_error(p: np.ndarray, y: np.ndarray, bins: int = 10) -> float:
+    """ECE: over bins of the top probability, the cell-weighted gap between it and the accuracy."""
+    top, hit = p.max(axis=1), (p.argmax(axis=1) == y)
+    which = np.minimum((top * bins).astype(int), bins - 1)
+    gap = 0.0
+    for b in range(bins):
+        sel = which == b
+        if sel.any():
+            gap += sel.sum() * abs(float(top[sel].mean()) - float(hit[sel].mean()))
+    return gap / max(len(y), 1)
+
+
+def fit(x: np.ndarray, y: np.ndarray, hidden: int = 96, epochs: int = 30, lr: float = 2e-3, decay: float = 1e-3,
+        seed: int = 0, progress: bool = True) -> CellModel:
+    """Fit the network (temperature 1) by Adam on softmax cross-entropy with weight decay,
+    on ``x`` and its dihedral copies."""
+    rng = np.random.default_rng(seed)
+    xa, ya = dihedral(x), np.tile(y, 8)
+    mean = xa.mean(axis=0)
+    scale = np.maximum(xa.std(axis=0), 1e-3)
+    z_all = ((xa - mean) / scale).astype(np.float32)
+    params = [rng.normal(0, np.sqrt(2.0 / N_INPUTS), (N_INPUTS, hidden)).astype(np.float32),
+              np.zeros(hidden, np.float32),
+              rng.normal(0, np.sqrt(1.0 / hidden), (hidden, 3)).astype(np.float32), np.zeros(3, np.float32)]
+    m1 = [np.zeros_like(p) for p in params]
+    m2 = [np.zeros_like(p) for p in params]
+    batch, step = 512, 0
+    onehot = np.eye(3, dtype=np.float32)
+    bar = _Ticker(epochs, "epochs", progress)
+    for _ in range(epochs):
+        order = rng.permutation(len(ya))
+        for i in range(0, len(order), batch):
+            idx = order[i:i + batch]
+            z, t = z_all[idx], onehot[ya[idx]]
+            w1, b1, w2, b2 = params
+            pre = z @ w1 + b1
+            h = np.maximum(pre, 0.0)
+            g = (_softmax(h @ w2 + b2) - t) / len(idx)
+            gh = (g @ w2.T) * (pre > 0)
+            grads = [z.T @ gh + decay * w1, gh.sum(axis=0), h.T @ g + decay * w2, g.sum(axis=0)]
+            step += 1
+            for k, (p, gr) in enumerate(zip(params, grads)):
+                m1[k] = 0.9 * m1[k] + 0.1 * gr
+                m2[k] = 0.999 * m2[k] + 0.001 * gr * gr
+                mh, vh = m1[k] / (1 - 0.9 ** step), m2[k] / (1 - 0.999 ** step)
+                p -= (lr * mh / (np.sqrt(vh) + 1e-8)).astype(np.float32)
+        bar.update()
+    w1, b1, w2, b2 = params
+    return CellModel(mean.astype(np.float32), scale.astype(np.float32), w1, b1, w2, b2)
+
+
+def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
+    """The temperature (0.25..8) with the least negative log-likelihood on ``x``, ``y``, with
+    the model's rule weight."""
+    best, best_nll = 1.0, np.inf
+    for t in np.exp(np.linspace(np.log(0.25), np.log(8.0), 97)):
+        model.temperature = float(t)
+        p = model.probs(x)
+        nll = -float(np.mean(np.log(np.maximum(p[np.arange(len(y)), y], 1e-12))))
+        if nll < best_nll:
+            best, best_nll = float(t), nll
+    model.temperature = best
+    return best
+
+
+def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 96,
+          epochs: int = 30, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True
+          ) -> tuple[CellModel, dict[str, object]]:
+    """Collect, fit, calibrate (module docstring): the model and its report."""
+    data = collect(real_like, hard, workers, progress)
+    if len(data.y) < 50:
+        raise ValueError(f"{len(data.y)} cells from {data.photos} photos; expected at least 50 (render more photos)")
+    rng = np.random.default_rng(seed)
+    photos = np.unique(data.photo)
+    test = np.isin(data.photo, rng.choice(photos, max(1, int(round(held_out * len(photos)))), replace=False))
+    model = fit(data.x[~test], data.y[~test], hidden, epochs, decay=decay, seed=seed, progress=progress)
+    model.rule_weight = float(rule_weight)
+    xt, yt = data.x[test], data.y[test]
+    before = model.probs(xt)
+    fit_temperature(model, xt, yt)
+    after = model.probs(xt)
+    rule = xt[:, N_INPUTS - 4:N_INPUTS - 1].astype(np.float64)
+    report: dict[str, object] = {
+        "photos": data.photos, "photos_with_right_grid": data.kept, "cells_train": int((~test).sum()),
+        "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "hidden": hidden, "epochs": epochs,
+        "decay": decay, "rule_weight": rule_weight, "seed": seed, "temperature": round(model.temperature, 4),
+        "held_out_accuracy": round(float((after.argmax(1) == yt).mean()), 5),
+        "held_out_accuracy_rule": round(float((rule.argmax(1) == yt).mean()), 5),
+        "ece_before": round(expected_calibration_error(before, yt), 5),
+        "ece_after": round(expected_calibration_error(after, yt), 5),
+        "ece_rule": round(expected_calibration_error(rule, yt), 5)}
+    model.info = json.dumps(report)
+    return model, report
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m kinegym.agents.train_cells", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--real-like", type=int, default=2400, help="real-like photos (default 2400)")
+    ap.add_argument("--hard", type=int, default=600, help="hard rendered photos (default 600)")
+    ap.add_argument("--hidden", type=int, default=96, help="hidden units (default 96)")
+    ap.add_argument("--epochs", type=int, default=30, help="passes over the data (default 30)")
+    ap.add_argument("--decay", type=float, default=1e-3, help="weight decay (default 0.001)")
+    ap.add_argument("--rule-weight", type=float, default=0.3,
+                    help="weight of the hand rule's log-probabilities, a prior (default 0.3; 0..10)")
+    ap.add_argument("--workers", type=int, default=2, help="processes rendering photos (default 2)")
+    ap.add_argument("--seed", type=int, default=0, help="split and initialisation seed (default 0)")
+    ap.add_argument("--out", default=str(SHIPPED_MODEL), help="the model file (.npz; default: the shipped one)")
+    args = ap.parse_args(argv)
+    for name in ("real_like", "hard", "hidden", "epochs", "workers"):
+        value = getattr(args, name)
+        if not 0 <= value <= (100_000 if name in ("real_like", "hard") else 1_000):
+            top = 100_000 if name in ("real_like", "hard") else 1000
+            ap.error(f"--{name.replace('_', '-')} {value}; expected 0..{top}")
+    from kinegym.configs.io import write_atomic
+
+    for name, hi in (("decay", 1.0), ("rule_weight", 10.0)):
+        value = getattr(args, name)
+        if not 0 <= value <= hi:
+            ap.error(f"--{name.replace('_', '-')} {value}; expected 0..{hi:g}")
+    model, report = train(args.real_like, args.hard, workers=max(1, args.workers), hidden=max(1, args.hidden),
+                          epochs=args.epochs, decay=args.decay, rule_weight=args.rule_weight, seed=args.seed)
+    path = write_atomic(args.out, model.to_bytes(), suffixes=(".npz",), what="cell model")
+    print(json.dumps(report, indent=1))
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
