@@ -108,18 +108,15 @@ def real_like(count: int) -> None:
     rows: dict[str, list] = {}
     for i in range(count):
         sc = real_like_scene(20_000 + i)
+        trace: dict[str, object] = {}
         t0 = time.perf_counter()
         try:
-            got = reader.read(sc.image).cells
-        except NoBoardError:
-            got = None
-        dt = (time.perf_counter() - t0) * 1e3
-        trace: dict[str, object] = {}
-        try:  # the hand rule alone, for comparison (its probabilities are among the model's inputs)
-            reader.read(sc.image, trace)
+            got = reader.read(sc.image, trace).cells
+            # the hand rule alone, for comparison: its probabilities are among the model's inputs
             rule = np.asarray(trace["cell_inputs"])[:, -4:-1].argmax(axis=1).reshape(3, 3)
         except NoBoardError:
-            rule = None
+            got = rule = None
+        dt = (time.perf_counter() - t0) * 1e3
         w = int(sc.notes["width"])
         for key in (f"{sc.notes['surface']}", "all", "width <= 960" if w <= 960 else "width 1,280-2,048"
                     if w <= 2048 else "width 3,000-4,000"):
