@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinegym.vision.board_reader import BoardReader, NoBoardError
-from kinegym.vision.cell_model import N_INPUTS, SHIPPED_MODEL, CellModel, dihedral
+from kinegym.vision.cell_model import N_INPUTS, SHIPPED_MODEL, CellModel, dihedral, rule_probs
 from kinegym.vision.ink import _apply
 
 __all__ = ["CellData", "grid_is_right", "collect", "fit", "expected_calibration_error", "main"]
@@ -216,7 +216,7 @@ def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers
     before = model.probs(xt)
     fit_temperature(model, xt, yt)
     after = model.probs(xt)
-    rule = xt[:, N_INPUTS - 4:N_INPUTS - 1].astype(np.float64)
+    rule = rule_probs(xt)
     report: dict[str, object] = {
         "photos": data.photos, "photos_with_right_grid": data.kept, "cells_train": int((~test).sum()),
         "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "hidden": hidden, "epochs": epochs,

@@ -103,6 +103,7 @@ def real_like(count: int) -> None:
     """The real-like set: per surface and in all, cells and boards right, X vs O, refusals,
     and the reader's time by photo width."""
     from kinegym.envs.sim.scenes_real import real_like_scene
+    from kinegym.vision.cell_model import rule_probs
 
     reader = BoardReader(size=3)
     rows: dict[str, list] = {}
@@ -113,7 +114,7 @@ def real_like(count: int) -> None:
         try:
             got = reader.read(sc.image, trace).cells
             # the hand rule alone, for comparison: its probabilities are among the model's inputs
-            rule = np.asarray(trace["cell_inputs"])[:, -4:-1].argmax(axis=1).reshape(3, 3)
+            rule = rule_probs(np.asarray(trace["cell_inputs"])).argmax(axis=1).reshape(3, 3)
         except NoBoardError:
             got = rule = None
         dt = (time.perf_counter() - t0) * 1e3

@@ -39,7 +39,7 @@ from kinegym.configs.io import read_bytes
 
 from .errors import VisionError
 
-__all__ = ["POOL", "CROPS", "N_INPUTS", "CellModel", "cell_inputs", "SHIPPED_MODEL"]
+__all__ = ["POOL", "CROPS", "N_INPUTS", "CellModel", "cell_inputs", "rule_probs", "dihedral", "SHIPPED_MODEL"]
 
 #: side of the pooled crop
 POOL = 10
@@ -88,6 +88,11 @@ def cell_inputs(rect: np.ndarray, n: int, s: int, o: int, feats: np.ndarray, rul
                            np.full((n * n, 1), ref)], axis=1).astype(np.float32)
 
 
+def rule_probs(x: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` the hand rule's probabilities of empty / X / O, as they lie in the inputs ``x``."""
+    return np.asarray(x, np.float64)[:, _RULE:_RULE + 3]
+
+
 def dihedral(x: np.ndarray) -> np.ndarray:
     """The 8 rotations and mirror images of each row's crops (the other inputs unchanged):
     ``(8 * N, N_INPUTS)``. An X turned or mirrored is still an X; so is an O."""
@@ -132,7 +137,7 @@ class CellModel:
 
     def probs(self, x: np.ndarray) -> np.ndarray:
         """``(N, 3)`` calibrated probabilities of empty / X / O."""
-        rule = np.asarray(x, np.float64)[:, _RULE:_RULE + 3]
+        rule = rule_probs(x)
         z = self.logits(x) / self.temperature + self.rule_weight * np.log(np.clip(rule, 1e-4, 1.0))
         z = np.exp(z - z.max(axis=1, keepdims=True))
         return (z / z.sum(axis=1, keepdims=True)).astype(np.float64)
