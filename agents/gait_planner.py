@@ -23,9 +23,12 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from kinegym.envs.climb_task import candidate_holes, hop_counts, stance_hops, start_stances
 from kinegym.envs.sim.climber_model import ClimberModel
-from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
+from kinegym.envs.sim.gait import MovePlan, plan_move
+from kinegym.envs.sim.gait_kernel import feasible_moves
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["GaitPlanner", "Route", "start_stances", "find_route", "PlannerAgent"]
@@ -74,12 +77,29 @@ class GaitPlanner:
         self.candidates = candidates
         self.span = 2.0 * max(model.reach[1])
         self._moves: dict[Stance, list[tuple[int, int, Stance, MovePlan]]] = {}
+        self._succ: dict[Stance, list[tuple[int, int, Stance]]] = {}
         self._hops: dict[int, list[int]] = {}
 
     def moves(self, stance: Sequence[int]) -> list[tuple[int, int, Stance, MovePlan]]:
         """Every feasible move from ``stance``: ``(arm, hole, next stance, plan)``."""
         st: Stance = (int(stance[0]), int(stance[1]), int(stance[2]))
         got = self._moves.get(st)
+        if got is None:
+            got = []
+            for arm, hole, nxt in self.successors(st):
+                plan = plan_move(self.model, self.holes, st, arm, hole, self.heading)
+                if not isinstance(plan, MovePlan):  # tests pin the two equal; say so loudly if they part
+                    raise RuntimeError(f"feasible_moves and plan_move disagree on stance {st}, arm {arm}, hole "
+                                       f"{hole}: {plan}")
+                got.append((arm, hole, nxt, plan))
+            self._moves[st] = got
+        return got
+
+    def successors(self, stance: Sequence[int]) -> list[tuple[int, int, Stance]]:
+        """Every feasible move from ``stance`` without its plan: ``(arm, hole, next stance)``
+        (judged all at once by :func:`~kinegym.envs.sim.gait_kernel.feasible_moves`)."""
+        st: Stance = (int(stance[0]), int(stance[1]), int(stance[2]))
+        got = self._succ.get(st)
         if got is not None:
             return got
         xy = self.holes.xy
@@ -91,22 +111,23 @@ class GaitPlanner:
                 ids = set(self.holes.within(xy[h], self.span).tolist())
                 near = ids if near is None else near & ids
             targets = sorted((near or set()) - set(st))
-        out = []
-        rest = rest_pose(self.model, self.holes, st, self.heading)
-        for hole in targets:
-            for arm in range(3):
-                plan = plan_move(self.model, self.holes, st, arm, hole, self.heading, rest=rest)
-                if isinstance(plan, MovePlan):
-                    nxt = list(st)
-                    nxt[arm] = hole
-                    out.append((arm, hole, (nxt[0], nxt[1], nxt[2]), plan))
-        self._moves[st] = out
-        return out
+        arms = np.tile(np.arange(3), len(targets))
+        holes = np.repeat(np.array(targets, dtype=np.intp), 3)
+        ok = feasible_moves(self.model, self.holes, st, arms, holes, self.heading)
+        got = []
+        for arm, hole in zip(arms[ok].tolist(), holes[ok].tolist()):
+            nxt = list(st)
+            nxt[arm] = hole
+            got.append((arm, hole, (nxt[0], nxt[1], nxt[2])))
+        self._succ[st] = got
+        return got
 
     def forbid(self, stance: Sequence[int], arm: int, hole: int) -> None:
         """Drop a move that failed when tried (physics disagreed with the gait model)."""
         st: Stance = (int(stance[0]), int(stance[1]), int(stance[2]))
-        self._moves[st] = [m for m in self.moves(st) if (m[0], m[1]) != (arm, hole)]
+        self._succ[st] = [m for m in self.successors(st) if (m[0], m[1]) != (arm, hole)]
+        if st in self._moves:
+            self._moves[st] = [m for m in self._moves[st] if (m[0], m[1]) != (arm, hole)]
 
     def hops(self, goal: int) -> list[int]:
         """Per hole: hops to ``goal`` through holes at most one arm span apart
@@ -141,7 +162,7 @@ class GaitPlanner:
             expanded += 1
             if expanded > max_expansions:
                 return Route(found=False, exhausted=False, expanded=expanded)
-            for arm, hole, nxt, _ in self.moves(st):
+            for arm, hole, nxt in self.successors(st):
                 ng = g + 1
                 if ng < best_g.get(nxt, 1 << 30):
                     best_g[nxt] = ng

@@ -3,12 +3,14 @@ BipedalWalker-v3 in the same run (``pip install -e ".[bench]"`` for Box2D).
 
 Run::
 
-    taskset -c 0 python bench/bench_envs.py [--seconds 20]
+    taskset -c 0 python bench/bench_envs.py [--seconds 20] [--climb-only]
 
 * HoleClimb-v0, kinematic: env steps per second under random valid actions (each step
   judges all 3 K candidate moves for the mask and tracks the localiser), and gait moves
   per second of the kinematic climber itself (``KinematicClimber.move``, fresh judgements,
   no cache hits), along random walks on a 10 x 16 wall.
+* Climber action masks per second: the 24 moves from one stance judged by the vectorised
+  kernel and by the scalar reference, over the same 200 stances (their answers compared).
 * HoleClimb-v0, physics: env steps (= gait moves) per second and physics steps per second.
 * TicTacToeDraw-v0: agent moves per second (each: the arm's mark, the opponent's mark, a
   photo and a reading; resets with the field and game ends with the wipe included) with
@@ -30,6 +32,8 @@ import kinegym  # noqa: F401
 from kinegym.envs.climb_task import candidate_holes, start_stances
 from kinegym.envs.sim.climber import KinematicClimber
 from kinegym.envs.sim.climber_model import ClimberModel
+from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
+from kinegym.envs.sim.gait_kernel import feasible_moves
 from kinegym.kinematics.holes import HoleMap
 
 
@@ -79,6 +83,40 @@ def gait_move_rate(seconds: float) -> tuple[float, int]:
     return n / (time.perf_counter() - t0), ok
 
 
+def mask_rates(seconds: float) -> tuple[float, float, int]:
+    """Action masks per second (the 3 K = 24 moves from one stance judged), by the vectorised
+    kernel (``gait_kernel.feasible_moves``) and by 24 calls of the scalar reference
+    (``gait.plan_move``), over the same stances; and how many single judgements disagreed."""
+    model = ClimberModel.from_config()
+    wall = HoleMap.grid(10, 16, 15.0, 1.0, missing=0.05, seed=3)
+    rng = np.random.default_rng(0)
+    starts = start_stances(model, wall)
+    jobs = []
+    while len(jobs) < 200:
+        st = list(starts[int(rng.integers(len(starts)))])
+        for _ in range(int(rng.integers(0, 6))):
+            near = candidate_holes(wall, st, 8, 40.0)
+            st[int(rng.integers(3))] = near[int(rng.integers(len(near)))]
+        if len(set(st)) == 3:
+            cand = candidate_holes(wall, st, 8, 40.0)
+            jobs.append((tuple(st), np.repeat(np.arange(3), len(cand)), np.tile(cand, 3)))
+    rates, answers = [], []
+    for kernel in (True, False):
+        n, t0, got = 0, time.perf_counter(), []
+        while time.perf_counter() - t0 < seconds / 2:
+            for st, arms, targets in jobs:
+                if kernel:
+                    got.append(feasible_moves(model, wall, st, arms, targets))
+                else:
+                    rest = rest_pose(model, wall, st)
+                    got.append(np.array([isinstance(plan_move(model, wall, st, int(a), int(h), rest=rest), MovePlan)
+                                         for a, h in zip(arms, targets)]))
+            n += len(jobs)
+        rates.append(n / (time.perf_counter() - t0))
+        answers.append(np.concatenate(got[:len(jobs)]))
+    return rates[0], rates[1], int((answers[0] != answers[1]).sum())
+
+
 def read_accuracy(games: int, camera: str = "default") -> None:
     """Share of TicTacToeDraw-v0 steps whose accepted reading equals the true board."""
     env = gym.make("kinegym/TicTacToeDraw-v0", draw_physics=False, opponent="thesis", erase=False, camera=camera)
@@ -105,16 +143,21 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="seconds per measurement")
     ap.add_argument("--ttt-games", type=int, default=200, help="games for the TicTacToeDraw reading figure")
+    ap.add_argument("--climb-only", action="store_true", help="only the climber and the two anchors")
     args = ap.parse_args()
     s = args.seconds
-    read_accuracy(args.ttt_games)
-    read_accuracy(max(1, args.ttt_games // 4), "hard")
+    if not args.climb_only:
+        read_accuracy(args.ttt_games)
+        read_accuracy(max(1, args.ttt_games // 4), "hard")
     print("| environment | steps per second | notes |")
     print("|---|---|---|")
+    kern, ref, differ = mask_rates(s)
+    print(f"| climber action masks, vectorised kernel | {kern:,.0f} | 24 moves judged per mask; scalar reference "
+          f"{ref:,.0f} masks/s ({kern / ref:.2f}x); {differ} judgements differ |")
     rate, n = gait_move_rate(s)
     print(f"| climber kinematic gait moves (`KinematicClimber.move`) | {rate:,.0f} | fresh judgements, {n} ok |")
-    rate, n = env_rate(gym.make("kinegym/HoleClimb-v0"), s, True)
-    print(f"| HoleClimb-v0 kinematic | {rate:,.0f} | random valid actions, {n} steps |", flush=True)
+    climb, n = env_rate(gym.make("kinegym/HoleClimb-v0"), s, True)
+    print(f"| HoleClimb-v0 kinematic | {climb:,.0f} | random valid actions, {n} steps, resets included |", flush=True)
     env = gym.make("kinegym/HoleClimb-v0", mode="physics")
     rng = np.random.default_rng(1)
     obs, info = env.reset(seed=1)
@@ -132,7 +175,7 @@ def main() -> None:
     print(f"| HoleClimb-v0 physics: gait moves | {moves / el:,.1f} | each a whole simulated motion |")
     print(f"| HoleClimb-v0 physics: pymunk steps | {steps / el:,.0f} | 240 Hz, {steps / max(moves, 1):.0f} "
           f"steps per move |", flush=True)
-    for phys in (False, True):
+    for phys in (() if args.climb_only else (False, True)):
         env = gym.make("kinegym/TicTacToeDraw-v0", draw_physics=phys, opponent="thesis")
         rng = np.random.default_rng(2)
         obs, info = env.reset(seed=2)
@@ -149,7 +192,8 @@ def main() -> None:
     for anchor in ("LunarLander-v3", "BipedalWalker-v3"):
         try:
             rate, n = env_rate(gym.make(anchor), s, False)
-            print(f"| {anchor} | {rate:,.0f} | random actions |", flush=True)
+            print(f"| {anchor} | {rate:,.0f} | random actions; HoleClimb-v0 kinematic runs at {climb / rate:.2f}x |",
+                  flush=True)
         except (gym.error.DependencyNotInstalled, ImportError) as err:
             print(f"| {anchor} | - | not installed: {err} |")
 

@@ -5,7 +5,8 @@ or the pymunk :class:`~kinegym.envs.sim.climber.PhysicsClimber`), its six noisy 
 the localiser (:class:`~kinegym.kinematics.localization.Localizer`, tracking after every
 move) into the robot's belief: which holes it holds and where its body is. From that belief
 it offers its moves - the task's candidate holes, each masked by its own gait model
-(:func:`~kinegym.envs.sim.gait.plan_move`). It never sees its true pose; the env reads that
+(:func:`~kinegym.envs.sim.gait.plan_move`, judged many at once by
+:func:`~kinegym.envs.sim.gait_kernel.feasible_moves`). It never sees its true pose; the env reads that
 from ``sim`` only for the reward and the pictures.
 """
 
@@ -19,7 +20,7 @@ import numpy as np
 from kinegym.envs.climb_task import candidate_holes
 from kinegym.envs.sim.climber import KinematicClimber, PhysicsClimber
 from kinegym.envs.sim.climber_model import ClimberModel
-from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
+from kinegym.envs.sim.gait_kernel import feasible_moves
 from kinegym.kinematics.holes import HoleMap
 from kinegym.kinematics.localization import Localizer
 from kinegym.kinematics.pose_fit import AmbiguousFixError, Fix, NoFixError, NoiseModel
@@ -89,13 +90,11 @@ class ClimbRobot:
             holes = self.sim.holes
             near = candidate_holes(holes, stance, k, 2.0 * reach)
             cand = (near + [-1] * k)[:k]
+            targets = np.array(cand * 3)
+            arms = np.repeat(np.arange(3), k)
             mask = np.zeros(3 * k, dtype=bool)
-            rest = rest_pose(self.model, holes, stance)
-            for i, h in enumerate(cand):
-                if h >= 0:
-                    for arm in range(3):
-                        mask[arm * k + i] = isinstance(plan_move(self.model, holes, stance, arm, h, rest=rest),
-                                                       MovePlan)
+            real = targets >= 0
+            mask[real] = feasible_moves(self.model, holes, stance, arms[real], targets[real])
             got = cache[stance] = (cand, mask)
         return list(got[0]), got[1].copy()
 

@@ -214,9 +214,9 @@ class Fix:
             if self._h is None:
                 self._covariance = np.full((3, 3), np.nan)
             else:
-                hands = np.array(self._h, dtype=float).T
-                cov = np.array([[[a, b], [b, c]] for a, b, c in self._cov])  # type: ignore[union-attr]
-                self._covariance = _pose_covariance(self.best.pose, hands, cov)
+                hx, hy = self._h
+                self._covariance = _pose_covariance(float(self.best.pose[2]), list(zip(hx, hy)),
+                                                    self._cov)  # type: ignore[arg-type]
         return self._covariance
 
     @property
@@ -393,12 +393,31 @@ def _inv3(m: list[list[float]]) -> list[list[float]]:
             [C * r, (b * g - a * h) * r, (a * e - b * d) * r]]
 
 
-def _pose_covariance(pose: np.ndarray, h: np.ndarray, cov_body: np.ndarray) -> np.ndarray:
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    rot = np.array([[c, -s], [s, c]])
-    info = np.zeros((3, 3))
-    for i in range(3):
-        jac = np.array([[1.0, 0.0, -s * h[i, 0] - c * h[i, 1]], [0.0, 1.0, c * h[i, 0] - s * h[i, 1]]])
-        w = np.linalg.inv(rot @ cov_body[i] @ rot.T)
-        info += jac.T @ w @ jac
-    return np.linalg.inv(info)
+def _pose_covariance(heading: float, hands: Sequence[tuple[float, float]],
+                     hand_cov: Sequence[tuple[float, float, float]]) -> np.ndarray:
+    """The 3x3 covariance of a fitted pose ``(x, y, heading)``: the inverse of the Fisher
+    information ``sum_i J_i^T W_i J_i`` of the three hands, ``J_i`` the wall-frame hand's
+    derivative by the pose (hand ``i`` at body-frame ``hands[i]``) and ``W_i`` the inverse
+    of its wall-frame covariance (body-frame ``(a, b, c)`` = ``[[a, b], [b, c]]``, rotated by
+    the heading). Plain floats: it is on the tracking path of every env step."""
+    c, s = math.cos(heading), math.sin(heading)
+    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
+    for (hx, hy), (a, b, cc) in zip(hands, hand_cov):
+        # R C R^T, then its inverse W (symmetric 2x2)
+        r00 = c * (c * a - s * b) - s * (c * b - s * cc)
+        r01 = s * (c * a - s * b) + c * (c * b - s * cc)
+        r11 = s * (s * a + c * b) + c * (s * b + c * cc)
+        det = r00 * r11 - r01 * r01
+        w00, w01, w11 = r11 / det, -r01 / det, r00 / det
+        j0, j1 = -s * hx - c * hy, c * hx - s * hy  # d(hand)/d(heading)
+        i00 += w00
+        i01 += w01
+        i11 += w11
+        i02 += w00 * j0 + w01 * j1
+        i12 += w01 * j0 + w11 * j1
+        i22 += j0 * (w00 * j0 + w01 * j1) + j1 * (w01 * j0 + w11 * j1)
+    # the inverse of the symmetric information matrix by its adjugate
+    c00, c01, c02 = i11 * i22 - i12 * i12, i02 * i12 - i01 * i22, i01 * i12 - i02 * i11
+    c11, c12, c22 = i00 * i22 - i02 * i02, i01 * i02 - i00 * i12, i00 * i11 - i01 * i01
+    det = i00 * c00 + i01 * c01 + i02 * c02
+    return np.array([[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]]) / det

@@ -377,7 +377,7 @@ class PhysicsClimber(ClimberSim):
         old = held[arm]
         new = tuple(self.holes.xy[hole])
         self._release(arm)
-        seg = _path_length(self._shoulder(target_pose, arm), old, new)
+        seg = _path_length(self._shoulder(target_pose, arm), old, new, (target_pose[0], target_pose[1]))
         t_swing = max(0.2, seg / p.swing_speed_cm_s)
         n_swing = int(t_swing / self.dt)
         body_pose = target_pose
@@ -388,7 +388,7 @@ class PhysicsClimber(ClimberSim):
             f = min(1.0, t / t_swing)
             f = f * f * (3 - 2 * f)
             hs = list(held)
-            hs[arm] = _around(shoulder, a, b, f)
+            hs[arm] = _around(shoulder, a, b, f, (body_pose[0], body_pose[1]))
             targets = self._ik_all(body_pose, hs)
             # the swinging arm aims from where the body really is (the robot knows it from
             # the holding arms' encoders): a sagging body does not throw the hand off

@@ -7,8 +7,9 @@ gripping, release one arm, swing its hand to the new hole, grip. :func:`plan_mov
 the move: reach and elbow limits along the shift and the swing, the static torques at the
 four holding servos while one arm swings (:func:`swing_loads`: the 1-parameter family of
 force splits between the two holding arms is searched for one within every servo's limit),
-the free arm's own gravity torque and each gripper's holding force. Microseconds per move:
-the planner, the kinematic simulation and the environment's action masks all use it.
+the free arm's own gravity torque and each gripper's holding force. The kinematic
+simulation judges its moves here; the action masks and the route finder judge a stance's
+moves all at once with its vectorised twin, :mod:`kinegym.envs.sim.gait_kernel`.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from kinegym.kinematics.climber import arm_ik_one
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "min_enclosing_circle", "rest_pose",
-           "PHASES", "SWING_CHECKS", "SHIFT_CHECKS"]
+           "PHASES", "SWING_CHECKS", "SHIFT_CHECKS", "HALF_TURN"]
 
 #: The gait's phases, in order, that a failed move names: judged before trying (``plan``),
 #: the body ``shift`` on the old holes, the ``swing``, ``reach``-ing into the new hole, the
@@ -34,6 +35,8 @@ PHASES = ("plan", "shift", "swing", "reach", "grip", "rest")
 SWING_CHECKS = 8
 #: Segments of a body shift whose inner points :func:`plan_move` checks for clearance.
 SHIFT_CHECKS = 8
+#: A swing turning the hand more than this (rad) round its shoulder is a half turn (see ``_around``).
+HALF_TURN = math.pi - 1e-9
 
 
 def min_enclosing_circle(pts: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
@@ -365,7 +368,7 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     worst, grip = 0.0, 0.0
     for i in (SWING_CHECKS, *range(SWING_CHECKS)):  # the end first: it rejects most
         f = i / SWING_CHECKS
-        hand = hands[arm] if i == SWING_CHECKS else _around(shoulder, old, hands[arm], f)
+        hand = hands[arm] if i == SWING_CHECKS else _around(shoulder, old, hands[arm], f, (cx, cy))
         hs, qs = list(hands), list(q)
         if i < SWING_CHECKS:
             bx, by = hand[0] - shoulder[0], hand[1] - shoulder[1]
@@ -393,18 +396,25 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, np.array(q_end))
 
 
-def _around(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float], f: float
-            ) -> tuple[float, float]:
+def _around(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float], f: float,
+            body: tuple[float, float] | None = None) -> tuple[float, float]:
     """The point a share ``f`` of the way from ``a`` to ``b`` on the path that sweeps round
-    ``centre`` (angle and radius interpolated): a swinging hand never passes over the body."""
+    ``centre`` (angle and radius interpolated), the shorter way round. A half turn (``a`` and
+    ``b`` opposite about ``centre``: the four holes' circle has the moving hand's old and new
+    holes as its diameter, so the shoulder lies half-way between them) is as short either way;
+    it then sweeps on the side away from the ``body`` centre, so the hand never passes over
+    the body (without this rule rounding noise chose the side)."""
     ax, ay, bx, by = a[0] - centre[0], a[1] - centre[1], b[0] - centre[0], b[1] - centre[1]
     ra, rb = math.hypot(ax, ay), math.hypot(bx, by)
     ta = math.atan2(ay, ax)
     dt = math.remainder(math.atan2(by, bx) - ta, 2 * math.pi)
+    if body is not None and abs(dt) > HALF_TURN:
+        dt = math.pi if (body[0] - centre[0]) * ay - (body[1] - centre[1]) * ax >= 0 else -math.pi
     r, t = ra + f * (rb - ra), ta + f * dt
     return centre[0] + r * math.cos(t), centre[1] + r * math.sin(t)
 
 
-def _path_length(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
-    pts = [_around(centre, a, b, i / 16) for i in range(17)]
+def _path_length(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float],
+                 body: tuple[float, float] | None = None) -> float:
+    pts = [_around(centre, a, b, i / 16, body) for i in range(17)]
     return sum(math.hypot(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]) for i in range(16))

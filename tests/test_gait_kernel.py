@@ -1,0 +1,101 @@
+"""The vectorised gait kernel (``envs/sim/gait_kernel.py``) pinned equal to its scalar
+reference (``plan_move``, ``min_enclosing_circle``), and the half-turn swing rule both share."""
+
+import math
+
+import numpy as np
+import pytest
+
+from kinegym.envs.climb_task import candidate_holes, start_stances
+from kinegym.envs.sim import gait as C
+from kinegym.envs.sim.climber_model import ClimberModel
+from kinegym.envs.sim.gait import MovePlan, plan_move, rest_pose
+from kinegym.envs.sim.gait_kernel import enclosing_circles, feasible_moves
+from kinegym.kinematics import HoleMap
+
+
+def _walk_stances(model: ClimberModel, wall: HoleMap, rng: np.random.Generator, count: int) -> list[list[int]]:
+    """Stances a climber reaches by random feasible-looking moves from its start stances."""
+    starts = start_stances(model, wall)
+    out = []
+    while len(out) < count:
+        st = list(starts[int(rng.integers(len(starts)))])
+        for _ in range(int(rng.integers(0, 6))):
+            near = candidate_holes(wall, st, 8, 40.0)
+            st[int(rng.integers(3))] = near[int(rng.integers(len(near)))]
+        if len(set(st)) == 3:
+            out.append(st)
+    return out
+
+
+@pytest.mark.parametrize("robot", ["climber", "climber_long"])
+def test_feasible_moves_equals_plan_move_move_for_move(robot: str) -> None:
+    model = ClimberModel.from_config(robot)
+    rng = np.random.default_rng(11)
+    moves = feasible = 0
+    for w in range(4):
+        wall = HoleMap.grid(8, 12, float(rng.uniform(11, 16)), float(rng.uniform(0, 2)), 0.05, seed=w)
+        for heading in (0.0, 0.3):
+            for st in _walk_stances(model, wall, rng, 25):
+                cand = candidate_holes(wall, st, 8, 40.0) + [st[0]]  # an already held hole too
+                arms, targets = np.repeat([0, 1, 2], len(cand)), np.tile(cand, 3)
+                got = feasible_moves(model, wall, st, arms, targets, heading)
+                rest = rest_pose(model, wall, st, heading)
+                want = [isinstance(plan_move(model, wall, st, int(a), int(h), heading, rest=rest), MovePlan)
+                        for a, h in zip(arms, targets)]
+                assert got.tolist() == want, (robot, w, heading, st)
+                moves += len(want)
+                feasible += sum(want)
+    assert moves > 3000 and 0.05 * moves < feasible < 0.5 * moves  # both answers well represented
+
+
+def _half_turn_wall(model: ClimberModel) -> tuple[HoleMap, tuple[int, int, int], int]:
+    """Arm 0 moves between two holes whose shoulder-relative points are the diameter of the
+    four holes' circle: its shoulder lies half-way between them, the swing a half turn."""
+    offs = model.offsets(0.0)
+    r = min(model.reach[1]) - 2.0
+    rel = [(-r, 0.0), (1.0, r - 3.0), (1.0, -(r - 3.0)), (r, 0.0)]  # arms 0, 1, 2; then arm 0's new hole
+    arm_of = [0, 1, 2, 0]
+    xy = np.array([(x + offs[k][0], y + offs[k][1]) for (x, y), k in zip(rel, arm_of)])
+    return HoleMap(ids=np.array([[0, 0], [1, 1], [1, -1], [2, 0]]), xy=xy, name="half turn"), (0, 1, 2), 3
+
+
+def test_a_half_turn_swings_away_from_the_body_in_both() -> None:
+    model = ClimberModel.from_config("climber")
+    wall, st, hole = _half_turn_wall(model)
+    offs = model.offsets(0.0)
+    pts = [tuple(wall.xy[h] - offs[k]) for k, h in enumerate(st)] + [tuple(wall.xy[hole] - offs[0])]
+    cx, cy, _ = C.min_enclosing_circle(pts)
+    ox, oy = offs[0]
+    shoulder, old, new = (cx + ox, cy + oy), tuple(wall.xy[0]), tuple(wall.xy[hole])
+    mid = C._around(shoulder, old, new, 0.5, (cx, cy))
+    # half-way the hand is a swing radius from the shoulder, on the far side from the body
+    assert math.hypot(mid[0] - cx, mid[1] - cy) > math.hypot(shoulder[0] - cx, shoulder[1] - cy)
+    # mirrored so the body lies on the other side, the rule turns the other way
+    other = C._around(shoulder, new, old, 0.5, (cx, cy))
+    assert math.hypot(other[0] - cx, other[1] - cy) > math.hypot(shoulder[0] - cx, shoulder[1] - cy)
+    for heading in (0.0, 1e-13, -1e-13):  # rounding noise must not choose the side
+        want = isinstance(plan_move(model, wall, st, 0, hole, heading), MovePlan)
+        assert feasible_moves(model, wall, st, [0], [hole], heading).tolist() == [want]
+
+
+def test_enclosing_circles_equals_the_scalar_circle() -> None:
+    rng = np.random.default_rng(3)
+    for n in (2, 3, 4):
+        pts = rng.uniform(-10, 10, (400, n, 2))
+        pts[:50, -1] = pts[:50, 0]  # repeated points
+        pts[50:100, :, 1] = 2.0 * pts[50:100, :, 0]  # collinear points
+        cx, cy, r = enclosing_circles(pts)
+        for i in range(len(pts)):
+            assert (cx[i], cy[i], r[i]) == C.min_enclosing_circle([tuple(p) for p in pts[i]])
+
+
+def test_feasible_moves_edge_cases_are_plain() -> None:
+    model = ClimberModel.from_config("climber")
+    wall = HoleMap.grid(6, 6, 15.0, 0.0, seed=0)
+    st = start_stances(model, wall)[0]
+    assert feasible_moves(model, wall, st, [], []).shape == (0,)
+    assert not feasible_moves(model, wall, st, [0, 1, 2], list(st)).any()  # held holes
+    assert not feasible_moves(model, wall, st, [0], [7], rest="no rest pose").any()
+    with pytest.raises(ValueError, match="differ in length"):
+        feasible_moves(model, wall, st, [0, 1], [7])
