@@ -49,32 +49,32 @@ def test_feasible_moves_equals_plan_move_move_for_move(robot: str) -> None:
     assert moves > 3000 and 0.05 * moves < feasible < 0.5 * moves  # both answers well represented
 
 
-def _half_turn_wall(model: ClimberModel) -> tuple[HoleMap, tuple[int, int, int], int]:
-    """Arm 0 moves between two holes whose shoulder-relative points are the diameter of the
-    four holes' circle: its shoulder lies half-way between them, the swing a half turn."""
-    offs = model.offsets(0.0)
-    r = min(model.reach[1]) - 2.0
-    rel = [(-r, 0.0), (1.0, r - 3.0), (1.0, -(r - 3.0)), (r, 0.0)]  # arms 0, 1, 2; then arm 0's new hole
-    arm_of = [0, 1, 2, 0]
-    xy = np.array([(x + offs[k][0], y + offs[k][1]) for (x, y), k in zip(rel, arm_of)])
-    return HoleMap(ids=np.array([[0, 0], [1, 1], [1, -1], [2, 0]]), xy=xy, name="half turn"), (0, 1, 2), 3
-
-
-def test_a_half_turn_swings_away_from_the_body_in_both() -> None:
+def test_a_half_turn_takes_the_lighter_side_in_both() -> None:
+    # arm 1 moves between holes that are the diameter of the four holes' circle: its shoulder
+    # (at the body centre on this robot) lies half-way between them (402 such moves from this
+    # wall's start stances alone)
     model = ClimberModel.from_config("climber")
-    wall, st, hole = _half_turn_wall(model)
-    offs = model.offsets(0.0)
-    pts = [tuple(wall.xy[h] - offs[k]) for k, h in enumerate(st)] + [tuple(wall.xy[hole] - offs[0])]
-    cx, cy, _ = C.min_enclosing_circle(pts)
-    ox, oy = offs[0]
+    wall, st, hole = HoleMap.grid(8, 12, 15.0, 1.0, 0.05, seed=0), (0, 1, 11), 12
+    plan = plan_move(model, wall, st, 0, hole)
+    assert isinstance(plan, MovePlan) and plan.turn in (1.0, -1.0)
+    cx, cy, _ = plan.pose_to
+    ox, oy = model.offsets(0.0)[0]
     shoulder, old, new = (cx + ox, cy + oy), tuple(wall.xy[0]), tuple(wall.xy[hole])
-    mid = C._around(shoulder, old, new, 0.5, (cx, cy))
-    # half-way the hand is a swing radius from the shoulder, on the far side from the body
-    assert math.hypot(mid[0] - cx, mid[1] - cy) > math.hypot(shoulder[0] - cx, shoulder[1] - cy)
-    # mirrored so the body lies on the other side, the rule turns the other way
-    other = C._around(shoulder, new, old, 0.5, (cx, cy))
-    assert math.hypot(other[0] - cx, other[1] - cy) > math.hypot(shoulder[0] - cx, shoulder[1] - cy)
-    for heading in (0.0, 1e-13, -1e-13):  # rounding noise must not choose the side
+    assert abs(C._turn_angle(shoulder, old, new)) > C.HALF_TURN
+    # the two sides mirror each other about the shoulder; the way back retraces the way there
+    ccw, cw = C._around(shoulder, old, new, 0.5, 1.0), C._around(shoulder, old, new, 0.5, -1.0)
+    assert math.hypot(ccw[0] + cw[0] - 2 * shoulder[0], ccw[1] + cw[1] - 2 * shoulder[1]) < 1e-9
+    there, back = C._around(shoulder, old, new, 0.5, plan.turn), C._around(shoulder, new, old, 0.5, -plan.turn)
+    assert math.dist(there, back) < 1e-9
+    # a turn only chooses the side of a half turn: other swings keep the shorter way
+    near = (old[0], old[1] + 1.0)
+    assert C._around(shoulder, old, near, 0.5, 1.0) == C._around(shoulder, old, near, 0.5)
+    # the plan's side is the lighter one
+    hands = [tuple(wall.xy[h]) for h in (hole, st[1], st[2])]
+    q = [tuple(v) for v in plan.q_to]
+    sides = {t: C._swing_statics(model, plan.pose_to, hands, q, 0, shoulder, old, t, 1) for t in (1.0, -1.0)}
+    assert plan.torque_ratio == min(v[0] for v in sides.values() if not isinstance(v[0], str))
+    for heading in (0.0, 1e-13, -1e-13):  # rounding noise must not change the answer
         want = isinstance(plan_move(model, wall, st, 0, hole, heading), MovePlan)
         assert feasible_moves(model, wall, st, [0], [hole], heading).tolist() == [want]
 

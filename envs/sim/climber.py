@@ -350,6 +350,7 @@ class PhysicsClimber(ClimberSim):
             return result("fell", "the robot holds fewer than three holes", "plan")
         # the pose to shift to: the plan's, or (the planner expects the servos to fail)
         # the same minimal-circle pose, tried anyway - physics decides
+        turn = plan.turn if isinstance(plan, MovePlan) else 0.0  # a half turn's side, as planned
         if isinstance(plan, MovePlan):
             target_pose, q_to = plan.pose_to, plan.q_to
         else:
@@ -377,18 +378,18 @@ class PhysicsClimber(ClimberSim):
         old = held[arm]
         new = tuple(self.holes.xy[hole])
         self._release(arm)
-        seg = _path_length(self._shoulder(target_pose, arm), old, new, (target_pose[0], target_pose[1]))
+        seg = _path_length(self._shoulder(target_pose, arm), old, new, turn)
         t_swing = max(0.2, seg / p.swing_speed_cm_s)
         n_swing = int(t_swing / self.dt)
         body_pose = target_pose
 
         shoulder = self._shoulder(body_pose, arm)
 
-        def swing(t: float, a: tuple[float, float] = old, b: tuple[float, float] = new) -> None:
+        def swing(t: float, a: tuple[float, float] = old, b: tuple[float, float] = new, back: bool = False) -> None:
             f = min(1.0, t / t_swing)
             f = f * f * (3 - 2 * f)
             hs = list(held)
-            hs[arm] = _around(shoulder, a, b, f, (body_pose[0], body_pose[1]))
+            hs[arm] = _around(shoulder, a, b, f, -turn if back else turn)
             targets = self._ik_all(body_pose, hs)
             # the swinging arm aims from where the body really is (the robot knows it from
             # the holding arms' encoders): a sagging body does not throw the hand off
@@ -456,7 +457,7 @@ class PhysicsClimber(ClimberSim):
         works, a fall if it does not."""
         old = tuple(self.holes.xy[self.stance[arm]])
         phase = "reach" if outcome == "missed_hole" else "swing"
-        lost = self._run(n_swing, lambda t: swing(t, frm, old), stall=False)  # type: ignore[operator]
+        lost = self._run(n_swing, lambda t: swing(t, frm, old, True), stall=False)  # type: ignore[operator]
         if lost:
             return result(lost, f"{reason}; a gripper let go on the way", phase)  # type: ignore[operator]
         back = self._wait_capture(arm, old, 0.6)

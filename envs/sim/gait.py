@@ -95,6 +95,7 @@ class MovePlan:
     grip_force_n: float  # largest holding force during the swing
     pose_end: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the rest pose on the new stance
     q_end: np.ndarray | None = None  # at pose_end
+    turn: float = 0.0  # a half-turn swing's side: +1 counter-clockwise, -1 clockwise (0: the shorter way)
 
 
 @dataclass
@@ -365,10 +366,42 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     ax, ay = offs[arm]
     shoulder = (cx + ax, cy + ay)
     old = xy[stance[arm]]
+    # a half turn is as short either way round: the side with the lighter statics is taken
+    turns = (1.0, -1.0) if abs(_turn_angle(shoulder, old, hands[arm])) > HALF_TURN else (0.0,)
+    best: tuple[float, float, float] | None = None
+    failed: tuple[str, str] | None = None
+    for turn in turns:
+        got = _swing_statics(model, pose_to, hands, q, arm, shoulder, old, turn, branch)
+        if isinstance(got[0], str):
+            failed = failed or got  # type: ignore[assignment]
+        elif best is None or got[0] < best[1]:
+            best = (turn, got[0], got[1])  # type: ignore[assignment]
+    if best is None:
+        return failed  # type: ignore[return-value]
+    turn, worst, grip = best
+    q_end = []
+    for k in range(3):
+        hx, hy = xy[new_stance[k]]
+        bx, by = hx - pose_end[0] - offs[k][0], hy - pose_end[1] - offs[k][1]
+        q_end.append(arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch))
+    return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, np.array(q_end), turn)
+
+
+def _swing_statics(model: ClimberModel, pose_to: tuple[float, float, float], hands: list[tuple[float, float]],
+                   q: list[tuple[float, float]], arm: int, shoulder: tuple[float, float], old: tuple[float, float],
+                   turn: float, branch: int) -> tuple[float, float] | tuple[str, str]:
+    """The statics along a whole swing of ``arm`` (``turn`` as :func:`_around` takes it):
+    ``(worst torque ratio, largest grip force)``, or ``(outcome, reason)`` against it. The
+    free hand sweeps round its shoulder from the old hole to the new one (the path physics
+    drives), its weight's moment on the body changing as it goes; the end is the hand at
+    its new hole."""
+    p, links, heading = model.phys, model._links, pose_to[2]  # type: ignore[attr-defined]
+    lo, hi = model.geom.elbow_limits
+    c, s = math.cos(heading), math.sin(heading)
     worst, grip = 0.0, 0.0
     for i in (SWING_CHECKS, *range(SWING_CHECKS)):  # the end first: it rejects most
         f = i / SWING_CHECKS
-        hand = hands[arm] if i == SWING_CHECKS else _around(shoulder, old, hands[arm], f, (cx, cy))
+        hand = hands[arm] if i == SWING_CHECKS else _around(shoulder, old, hands[arm], f, turn)
         hs, qs = list(hands), list(q)
         if i < SWING_CHECKS:
             bx, by = hand[0] - shoulder[0], hand[1] - shoulder[1]
@@ -388,33 +421,35 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
             return "grip_lost", (f"a gripper would have to hold more than {p.holding_force_n:g} N with arm "
                                  f"{arm + 1} {where}")
         worst, grip = max(worst, ratio), max(grip, g)
-    q_end = []
-    for k in range(3):
-        hx, hy = xy[new_stance[k]]
-        bx, by = hx - pose_end[0] - offs[k][0], hy - pose_end[1] - offs[k][1]
-        q_end.append(arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch))
-    return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, np.array(q_end))
+    return worst, grip
+
+
+def _turn_angle(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    """The shorter signed angle (rad) from ``a`` to ``b`` round ``centre``."""
+    ta = math.atan2(a[1] - centre[1], a[0] - centre[0])
+    return math.remainder(math.atan2(b[1] - centre[1], b[0] - centre[0]) - ta, 2 * math.pi)
 
 
 def _around(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float], f: float,
-            body: tuple[float, float] | None = None) -> tuple[float, float]:
+            turn: float = 0.0) -> tuple[float, float]:
     """The point a share ``f`` of the way from ``a`` to ``b`` on the path that sweeps round
     ``centre`` (angle and radius interpolated), the shorter way round. A half turn (``a`` and
-    ``b`` opposite about ``centre``: the four holes' circle has the moving hand's old and new
-    holes as its diameter, so the shoulder lies half-way between them) is as short either way;
-    it then sweeps on the side away from the ``body`` centre, so the hand never passes over
-    the body (without this rule rounding noise chose the side)."""
+    ``b`` opposite about ``centre``: common, as the four holes' circle often has the moving
+    hand's old and new holes as its diameter, and the shoulder then lies half-way between
+    them) is as short either way: ``turn`` = +1 sweeps such a turn counter-clockwise, -1 clockwise
+    (:func:`plan_move` takes the side with the lighter statics, and physics follows the
+    plan; before, rounding noise chose the side)."""
     ax, ay, bx, by = a[0] - centre[0], a[1] - centre[1], b[0] - centre[0], b[1] - centre[1]
     ra, rb = math.hypot(ax, ay), math.hypot(bx, by)
     ta = math.atan2(ay, ax)
-    dt = math.remainder(math.atan2(by, bx) - ta, 2 * math.pi)
-    if body is not None and abs(dt) > HALF_TURN:
-        dt = math.pi if (body[0] - centre[0]) * ay - (body[1] - centre[1]) * ax >= 0 else -math.pi
+    dt = _turn_angle(centre, a, b)
+    if turn and abs(dt) > HALF_TURN:
+        dt = math.copysign(math.pi, turn)
     r, t = ra + f * (rb - ra), ta + f * dt
     return centre[0] + r * math.cos(t), centre[1] + r * math.sin(t)
 
 
 def _path_length(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float],
-                 body: tuple[float, float] | None = None) -> float:
-    pts = [_around(centre, a, b, i / 16, body) for i in range(17)]
+                 turn: float = 0.0) -> float:
+    pts = [_around(centre, a, b, i / 16, turn) for i in range(17)]
     return sum(math.hypot(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]) for i in range(16))

@@ -9,6 +9,8 @@ three (the new rest pose), reach and body clearance at both and along both shift
 limits at the swing pose and along the swing, and the statics (the best split of the body's
 weight between the two holding arms, every servo and gripper within its limit) at the end
 of the swing and at :data:`~kinegym.envs.sim.gait.SWING_CHECKS` points along it.
+A half-turn swing is judged on both sides, as :func:`plan_move` judges it (feasible if
+either side is).
 
 ``gait.py`` stays the readable reference (it also says *why* a move fails and returns the
 plan); ``tests/test_gait_kernel.py`` pins this kernel's answers equal to it on thousands of
@@ -163,8 +165,16 @@ def feasible_moves(model: ClimberModel, holes: HoleMap, stance: Sequence[int], a
     ra, rb = np.hypot(ox, oy), np.hypot(nx, ny)
     ta = np.arctan2(oy, ox)
     dt = _remainder(np.arctan2(ny, nx) - ta)
-    half = np.abs(dt) > HALF_TURN  # a half turn sweeps on the side away from the body (gait._around)
-    dt[half] = np.where((cx - sh_x) * oy - (cy - sh_y) * ox >= 0, math.pi, -math.pi)[half]
+    # a half turn is as short either way round: both sides are judged (one row each), and the
+    # move is feasible if either is (plan_move then takes the lighter one)
+    half = np.flatnonzero(np.abs(dt) > HALF_TURN)
+    dt[half] = math.pi
+    owner = np.concatenate([np.arange(n), half])
+    dt = np.concatenate([dt, np.full(len(half), -math.pi)])
+    idx, a, cx, cy, sh_x, sh_y, ra, rb, ta, hands = (v[owner] for v in (idx, a, cx, cy, sh_x, sh_y, ra, rb, ta,
+                                                                         hands))
+    n = len(owner)
+    rows = np.arange(n)
     fs = (np.arange(SWING_CHECKS) / SWING_CHECKS)[None, :]
     r, t = ra[:, None] + fs * (rb - ra)[:, None], ta[:, None] + fs * dt[:, None]
     swing_x, swing_y = sh_x[:, None] + r * np.cos(t), sh_y[:, None] + r * np.sin(t)  # (n, checks)
