@@ -416,8 +416,4 @@ def _pose_covariance(heading: float, hands: Sequence[tuple[float, float]],
         i02 += w00 * j0 + w01 * j1
         i12 += w01 * j0 + w11 * j1
         i22 += j0 * (w00 * j0 + w01 * j1) + j1 * (w01 * j0 + w11 * j1)
-    # the inverse of the symmetric information matrix by its adjugate
-    c00, c01, c02 = i11 * i22 - i12 * i12, i02 * i12 - i01 * i22, i01 * i12 - i02 * i11
-    c11, c12, c22 = i00 * i22 - i02 * i02, i01 * i02 - i00 * i12, i00 * i11 - i01 * i01
-    det = i00 * c00 + i01 * c01 + i02 * c02
-    return np.array([[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]]) / det
+    return np.array(_inv3([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]))

@@ -350,9 +350,9 @@ class PhysicsClimber(ClimberSim):
             return result("fell", "the robot holds fewer than three holes", "plan")
         # the pose to shift to: the plan's, or (the planner expects the servos to fail)
         # the same minimal-circle pose, tried anyway - physics decides
-        turn = plan.turn if isinstance(plan, MovePlan) else 0.0  # a half turn's side, as planned
+        turn = 0.0  # a half turn's side: as planned, or the shorter way's noise-free default
         if isinstance(plan, MovePlan):
-            target_pose, q_to = plan.pose_to, plan.q_to
+            target_pose, q_to, turn = plan.pose_to, plan.q_to, plan.turn
         else:
             xy = self.holes.xy
             st = list(self.stance)

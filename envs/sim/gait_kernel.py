@@ -180,8 +180,7 @@ def feasible_moves(model: ClimberModel, holes: HoleMap, stance: Sequence[int], a
     swing_x, swing_y = sh_x[:, None] + r * np.cos(t), sh_y[:, None] + r * np.sin(t)  # (n, checks)
     # joint angles: the three arms at the swing pose, then the free arm along its swing
     c, s = math.cos(heading), math.sin(heading)
-    l1 = np.array([lk[0] for lk in model._links])  # type: ignore[attr-defined]
-    l2 = np.array([lk[1] for lk in model._links])  # type: ignore[attr-defined]
+    l1, l2 = model.geom.l1, model.geom.l2
     bx = np.concatenate([hands[..., 0] - cx[:, None] - offs[:, 0], swing_x - sh_x[:, None]], axis=1)
     by = np.concatenate([hands[..., 1] - cy[:, None] - offs[:, 1], swing_y - sh_y[:, None]], axis=1)
     ik_arm = np.concatenate([np.broadcast_to([0, 1, 2], (n, 3)), np.broadcast_to(a[:, None], (n, SWING_CHECKS))],
@@ -222,7 +221,7 @@ def _statics_ok(model: ClimberModel, cx: np.ndarray, cy: np.ndarray, th: float, 
     safety, hold = p.torque_safety, p.holding_force_n
     w_up, w_low, w_hand = p.upper_link_mass_kg * G, p.lower_link_mass_kg * G, p.hand_mass_kg * G
     offs = np.array(model.offsets(th))
-    l1 = np.array([lk[0] for lk in model._links])  # type: ignore[attr-defined]
+    l1 = model.geom.l1
     rows = np.arange(len(cx))
     # the free arm hangs from its shoulder
     fsx = cx + offs[free, 0]
