@@ -17,8 +17,10 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   (Monitor CSVs with ``is_success``), ``tb/`` (TensorBoard), ``checkpoints/`` (model,
   optimiser, step counter and normalisation statistics every ``checkpoint_freq`` steps),
   ``best/best_model.zip`` (by a masked evaluation on validation walls), ``final_model.zip``,
-  ``evaluations.npz`` and ``learning_curve.png``. ``--resume RUN`` continues the last
-  checkpoint of ``RUN`` into a new directory ``RUN-resume<k>``; nothing of ``RUN`` is touched.
+  ``evaluations.npz`` and ``learning_curve.png``. ``--resume RUN`` continues the furthest
+  model of ``RUN`` (last checkpoint, or the final model of a ``--minutes`` stop) into a new
+  directory ``RUN-resume<k>``; nothing of ``RUN`` is touched. ``--mode physics`` with it is a
+  physics fine-tuning phase (the envs simulate every move in pymunk from then on).
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
   (fast: route checks and move judgements are kept); the evaluation callback uses fresh
@@ -195,6 +197,12 @@ def _callbacks(cfg: dict[str, Any], run: Path, n_envs: int, make: EnvFactory, ex
     return [ck, ev]
 
 
+def _check_mode(mode: str) -> str:
+    if mode not in ("kinematic", "physics"):
+        raise ValueError(f"mode={mode!r}; expected 'kinematic' or 'physics'")
+    return mode
+
+
 def _set_threads(n: int) -> None:
     import torch
 
@@ -222,8 +230,9 @@ def _step_hook(progress: StepHook | None) -> list[Any]:
 def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, seed: int = 0, n_envs: int | None = None,
           out: str | Path = "runs", progress: StepHook | None = None, overrides: dict[str, Any] | None = None,
           trial_callback: Any = None, command: Sequence[str] | None = None, minutes: float | None = None,
-          make_env: EnvFactory = make_env, verbose: int = 0) -> Path:
+          make_env: EnvFactory = make_env, verbose: int = 0, mode: str | None = None) -> Path:
     """Train MaskablePPO on HoleClimb-v0; returns the run directory (see the module docstring).
+    ``mode`` overrides the config's ``env_kwargs.mode`` for the training envs.
     ``minutes`` stops training after that much wall time (the final model is saved);
     ``progress(n)`` hears of every ``n`` env steps; ``verbose=1`` prints SB3's metrics table
     after every update (rollout success and lengths, losses, fps)."""
@@ -240,6 +249,8 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
         if not 1 <= n_envs <= 64:
             raise ValueError(f"n_envs={n_envs!r}; expected 1..64")
         cfg["n_envs"] = int(n_envs)
+    if mode is not None:
+        cfg["env_kwargs"] = {**cfg["env_kwargs"], "mode": _check_mode(mode)}
     _set_threads(cfg["torch_threads"])
     run = _new_run_dir(Path(out), f"gait-seed{seed}")
     _configs.write_atomic(run / "config.yaml", yaml.safe_dump({ENV_ID: cfg, "seed": seed}, sort_keys=False))
@@ -276,11 +287,14 @@ def _saved_steps(model_zip: Path) -> int:
 
 
 def _last_checkpoint(run: Path) -> tuple[Path, int]:
+    """The run's furthest model: its last checkpoint, or its final model when that went
+    further (a ``--minutes`` stop saves the final model between checkpoints)."""
     cks = sorted((int(p.stem.split("_")[1]), p) for p in (run / "checkpoints").glob("model_*_steps.zip"))
+    final = run / "final_model.zip"
+    if final.is_file():
+        cks.append((_saved_steps(final), final))
+        cks.sort(key=lambda c: c[0])
     if not cks:
-        final = run / "final_model.zip"
-        if final.is_file():
-            return final, _saved_steps(final)
         raise _configs.FileError(run, "no checkpoints/model_*_steps.zip and no final_model.zip",
                                  "a run with a checkpoint to resume from")
     steps, path = cks[-1]
@@ -289,10 +303,11 @@ def _last_checkpoint(run: Path) -> tuple[Path, int]:
 
 def resume(run_dir: str | Path, timesteps: int | None = None, progress: StepHook | None = None,
            command: Sequence[str] | None = None, minutes: float | None = None,
-           make_env: EnvFactory = make_env, verbose: int = 0) -> Path:
-    """Continue ``run_dir``'s last checkpoint (step counter, optimiser state, normalisation
+           make_env: EnvFactory = make_env, verbose: int = 0, mode: str | None = None) -> Path:
+    """Continue ``run_dir``'s furthest model (step counter, optimiser state, normalisation
     statistics) in a new directory ``<run_dir>-resume<k>`` up to ``timesteps`` in total
-    (default: the run's ``n_timesteps``)."""
+    (default: the run's ``n_timesteps``). ``mode`` (``"kinematic"`` / ``"physics"``) sets the
+    training envs' mode from here on (a physics fine-tuning phase); default: the run's."""
     from kinegym.agents.atomic_save import AtomicMaskablePPO
     from kinegym.agents.policies import load_maskable
 
@@ -311,6 +326,8 @@ def resume(run_dir: str | Path, timesteps: int | None = None, progress: StepHook
         raise _configs.ConfigError(str(ck), "--timesteps", total,
                                    f"more than the {steps} steps the checkpoint is already at")
     cfg["n_timesteps"] = total
+    if mode is not None:
+        cfg["env_kwargs"] = {**cfg["env_kwargs"], "mode": _check_mode(mode)}
     _set_threads(cfg["torch_threads"])
     k = 1
     while (src.parent / f"{src.name}-resume{k}").exists():

@@ -4,6 +4,7 @@ resume path, evaluation against the planner, and an Optuna study shared by two w
 from __future__ import annotations
 
 import hashlib
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -97,6 +98,22 @@ def test_train_smoke_resume_and_evaluate(tmp_path: Path) -> None:
     assert saved["resumed_steps"] == steps
     with pytest.raises(ValueError, match="already at"):
         T.resume(run, timesteps=steps, progress=False)
+
+    # a --minutes stop leaves the final model beyond the last checkpoint: resume takes the final model
+    cut = tmp_path / "cut"
+    (cut / "checkpoints").mkdir(parents=True)
+    shutil.copy2(run / "checkpoints" / "model_256_steps.zip", cut / "checkpoints" / "model_256_steps.zip")
+    shutil.copy2(run / "final_model.zip", cut / "final_model.zip")
+    assert T._last_checkpoint(cut) == (cut / "final_model.zip", first.num_timesteps)
+
+    # a physics fine-tuning phase: one rollout of the resumed run in physics mode
+    with pytest.raises(ValueError, match="mode='dynamic'"):
+        T.resume(res, timesteps=second.num_timesteps + 128, progress=False, mode="dynamic")
+    phys = T.resume(res, timesteps=second.num_timesteps + 128, progress=False, mode="physics")
+    cfg_phys = yaml.safe_load((phys / "config.yaml").read_text())
+    assert cfg_phys[T.ENV_ID]["env_kwargs"]["mode"] == "physics"
+    assert cfg_phys["resumed_steps"] == second.num_timesteps
+    assert MaskablePPO.load(phys / "final_model.zip", device="cpu").num_timesteps >= second.num_timesteps + 128
 
     rows = T.evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",))
     by = {r.agent: r for r in rows}

@@ -49,7 +49,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise UsageError(f"--resume {args.resume!r} is not a run directory")
         with Progress(args.timesteps or 1, "train (resumed)", enabled=show and bool(args.timesteps)) as bar:
             run = T.resume(args.resume, args.timesteps, progress=bar.update, command=["kinegym", *sys.argv[1:]],
-                           minutes=args.minutes, verbose=verbose)
+                           minutes=args.minutes, verbose=verbose, mode=args.mode)
     else:
         if args.timesteps is not None and args.timesteps < 1:
             raise UsageError(f"--timesteps {args.timesteps}; expected >= 1")
@@ -58,6 +58,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         cfg = T.load_train_config(args.config)
         if args.n_envs is not None:
             cfg["n_envs"] = args.n_envs
+        if args.mode is not None:
+            cfg["env_kwargs"] = {**cfg["env_kwargs"], "mode": args.mode}
         steps = args.timesteps or cfg["n_timesteps"]
         if not args.json:
             sps = T.steps_per_second(cfg["env_kwargs"])
@@ -68,7 +70,8 @@ def cmd_train(args: argparse.Namespace) -> int:
                        f"{_minutes(est)} here ({sps:.0f} env steps/s measured){limit}")
         with Progress(steps, "train", enabled=show) as bar:
             run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=bar.update,
-                          command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose)
+                          command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose,
+                          mode=args.mode)
     files = sorted(str(p.relative_to(run)) for p in run.rglob("*") if p.is_file() and "tb" not in p.parts)
     lines = [f"run directory: {run}"] + [f"  {f}" for f in files if not f.startswith("monitor/")]
     curve = run / "learning_curve.png"
@@ -194,6 +197,9 @@ def add_parsers(sub: Any) -> None:
     tr.add_argument("--n-envs", type=int, default=None, help="parallel envs (SubprocVecEnv when > 1)")
     tr.add_argument("--out", default="runs", help="folder for run directories")
     tr.add_argument("--resume", default=None, help="continue this run directory's last checkpoint")
+    tr.add_argument("--mode", default=None, choices=("kinematic", "physics"),
+                    help="the training envs' mode (default: the config's env_kwargs.mode; with --resume a "
+                         "physics fine-tuning phase)")
     tr.add_argument("--minutes", type=float, default=None,
                     help="stop after this much wall time (final model saved; default: no limit)")
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
