@@ -119,10 +119,12 @@ def stance_hops(hops: Sequence[int], stance: Sequence[int]) -> int:
     return sum(max(0, v - 1) for v in hs) + (0 if min(hs) == 0 else 1)
 
 
-def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> list[tuple[int, int, int]]:
+def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5,
+                  limit: int | None = None) -> list[tuple[int, int, int]]:
     """Stances near the bottom of the wall the robot can rest in (:func:`~kinegym.envs.sim.gait.rest_pose`:
     its three holes within reach, none under the body), lowest first: the holes within ``rows``
-    spacings of the lowest hole."""
+    spacings of the lowest hole. ``limit``: only the lowest ``limit`` of them (the same first
+    ``limit`` entries; candidates are tried lowest first, so the rest are never judged)."""
     xy = holes.xy
     y0 = float(xy[:, 1].min())
     low = [i for i in range(len(holes)) if xy[i, 1] <= y0 + rows * holes.spacing]
@@ -132,11 +134,13 @@ def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5) -> lis
     # only triples whose holes are pairwise within two reaches can fit (a wall's bottom row of a
     # hundred holes would otherwise be a million permutations)
     near = {i: [j for j in holes.within(xy[i], 2.0 * reach + 1e-9).tolist() if j in low_set and j != i] for i in low}
-    triples = ((i, j, k) for i in low for j, k in itertools.permutations(near[i], 2) if k in near[j])
+    triples = sorted(((i, j, k) for i in low for j, k in itertools.permutations(near[i], 2) if k in near[j]),
+                     key=lambda s: (sum(xy[h, 1] for h in s), s))
     for st in triples:  # the robot can rest there: the pose every move starts from
         if not isinstance(rest_pose(model, holes, st), str):
-            out.append((st[0], st[1], st[2]))
-    out.sort(key=lambda s: (sum(xy[h, 1] for h in s), s))
+            out.append(st)
+            if limit is not None and len(out) >= limit:
+                break
     return out
 
 
@@ -226,12 +230,12 @@ class ClimbTask:
                 holes = HoleMap.grid(cols, rows, float(self._draw_range("spacing_cm", rng)),
                                      float(self._draw_range("jitter_cm", rng)), float(self._draw_range("missing", rng)),
                                      seed=int(rng.integers(2**31)), name=f"generated {cols}x{rows}")
-            starts = start_stances(self.model, holes)
+            starts = start_stances(self.model, holes, limit=12)
             if not starts:
                 if self.fixed_wall is not None:
                     break
                 continue
-            start = starts[int(rng.integers(min(len(starts), 12)))]
+            start = starts[int(rng.integers(len(starts)))]  # one of the 12 lowest
             ys = holes.xy[:, 1]
             top = np.flatnonzero(ys >= ys.max() - 0.5 * holes.spacing)
             first = int(rng.integers(len(top)))
