@@ -164,9 +164,14 @@ def parse_schedule(value: Any) -> float | Callable[[float], float]:
     raise ValueError(f"schedule {value!r}: expected a number > 0 or 'lin_<number>'")
 
 
+_TRAINED_ID = "kinegym/HoleClimbMemoryHints-v0"  # what kinegym train gait trains by default
+
+
 def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str | None = None) -> dict[str, Any]:
     """The validated section of a training YAML (a ``configs/train`` name or a path) for
-    ``env_id``, or (None) for the one HoleClimb id it has a section for.
+    ``env_id``, or (None) for the one HoleClimb id it has a section for - or, in a file with
+    several (RL Zoo's ``kinegym/zoo/ppo_mask.yml``), the section of ``kinegym/HoleClimbMemoryHints-v0``,
+    the id ``kinegym train gait`` trains.
 
     Both spellings are read: kinegym's (``kinegym/HoleClimb-v0`` with ``env_kwargs: {memory:
     true, hints: true}``) and RL Zoo's (a section per registered id, e.g.
@@ -179,6 +184,8 @@ def load_train_config(path: str | Path = DEFAULT_CONFIG, env_id: str | None = No
     data = _configs.load_yaml(src)
     ids = [env_id] if env_id is not None else list(HOLE_CLIMB)
     found = [i for i in ids if isinstance(data, dict) and i in data]
+    if env_id is None and len(found) > 1 and _TRAINED_ID in found:  # RL Zoo's file: a section for every id
+        found = [_TRAINED_ID]
     if len(found) != 1:
         keys = sorted(map(str, data)) if isinstance(data, dict) else data
         want = f"a section for {env_id}" if env_id else "one section for a HoleClimb id: " + ", ".join(HOLE_CLIMB)

@@ -196,3 +196,12 @@ def test_long_commands_announce_their_cost_and_report_per_trial(tmp_path: Path) 
     for word in train.stdout.split():
         if word.endswith(".zip"):
             assert (tmp_path / word).is_file() or (run / word).is_file(), f"train names {word}, not written"
+
+
+def test_zoo_hyperparameters_are_the_default_configs() -> None:
+    """RL Zoo's gait section and kinegym's default training config name the same PPO run."""
+    ours = T.load_train_config()
+    zoo = T.load_train_config(Path(T.__file__).parents[1] / "kinegym" / "zoo" / "ppo_mask.yml")
+    keys = ("n_envs", "n_timesteps", "policy", "policy_kwargs", "env_kwargs", "learning_rate", "clip_range", "n_steps",
+            "batch_size", "n_epochs", "gamma", "gae_lambda", "ent_coef", "vf_coef", "max_grad_norm", "normalize")
+    assert {k: zoo[k] for k in keys} == {k: ours[k] for k in keys}
