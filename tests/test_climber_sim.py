@@ -148,7 +148,8 @@ def test_planner_routes_work_and_impossible_walls_are_proven() -> None:
     wall = HoleMap.grid(6, 9, 15.0, 0.8, missing=0.05, seed=5)
     starts = start_stances(MODEL, wall)
     assert len(starts) > 12 and start_stances(MODEL, wall, limit=12) == starts[:12]  # lowest first, judged lazily
-    assert all(ys == sorted(ys) for ys in [[sum(wall.xy[h, 1] for h in s) for s in starts]])
+    heights = [sum(wall.xy[h, 1] for h in s) for s in starts]
+    assert heights == sorted(heights)
     goal = int(np.argmax(wall.xy[:, 1]))
     route = GaitPlanner(MODEL, wall).plan(starts[0], goal)
     assert route.found and route.moves

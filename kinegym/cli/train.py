@@ -196,7 +196,8 @@ def add_parsers(sub: Any) -> None:
     tr.add_argument("--seed", type=int, default=0)
     tr.add_argument("--n-envs", type=int, default=None, help="parallel envs (SubprocVecEnv when > 1)")
     tr.add_argument("--out", default="runs", help="folder for run directories")
-    tr.add_argument("--resume", default=None, help="continue this run directory's last checkpoint")
+    tr.add_argument("--resume", default=None,
+                    help="continue this run directory's furthest model (last checkpoint or final model)")
     tr.add_argument("--mode", default=None, choices=("kinematic", "physics"),
                     help="the training envs' mode (default: the config's env_kwargs.mode; with --resume a "
                          "physics fine-tuning phase)")
