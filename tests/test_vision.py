@@ -140,3 +140,20 @@ def test_a_lattice_no_camera_could_see_is_passed_over(seed: int) -> None:
     sc = random_scene(seed, n=5, difficulty="hard", distractors=False)
     reading = BoardReader(size=5).read(sc.photo.image)
     assert (reading.cells == sc.cells).all()
+
+
+def test_ink_colour_is_the_pens_whatever_the_stroke() -> None:
+    """Black ink darkens R, G and B alike, blue ballpoint mostly R and G, a green marker R and
+    B; a pale stroke of a pen has the pen's colour (the direction, not the length)."""
+    from kinegym.vision.ink import angle_deg, colour_at, ink_colour, ink_map
+
+    img = np.full((120, 300, 3), 235, np.uint8)
+    pens = {"black": (20, 20, 20), "blue": (40, 60, 160), "green": (40, 150, 80), "pale blue": (160, 170, 210)}
+    for k, rgb in enumerate(pens.values()):
+        img[20:100, 30 + 70 * k:36 + 70 * k] = rgb
+    d, c = ink_map(img, 8.0), ink_colour(img, 8.0)
+    hue = {name: colour_at(d, c, np.array([[33.0 + 70 * k, y] for y in range(30, 90, 5)]))
+           for k, name in enumerate(pens)}
+    assert abs(hue["black"][0] - hue["black"][2]) < 0.02
+    assert hue["blue"][2] < 0.5 * hue["blue"][0] and hue["green"][1] < 0.7 * hue["green"][0]
+    assert angle_deg(hue["blue"], hue["pale blue"]) < 8 < angle_deg(hue["blue"], hue["black"])

@@ -77,7 +77,7 @@ from .grid_lines import (
     _union_length,
 )
 from .hand_grid import GRID_SIDE_PX, erase_mask, find_hash_grid
-from .ink import _apply, _as_rgb, ink_map
+from .ink import _apply, _as_rgb, ink_colour, ink_map
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
 
@@ -196,7 +196,7 @@ class BoardReader:
         small = cv2.resize(rgb, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
         dg = ink_map(small, stroke_px=max(6.0, math.hypot(*small.shape[:2]) / 100))
         sizes = (self.size,) if self.size is not None else (3, 5)
-        grid = find_hash_grid(dg, sizes)
+        grid = find_hash_grid(dg, sizes, ink_colour(small, stroke_px=max(6.0, math.hypot(*small.shape[:2]) / 100)))
         fx, fy = w / dg.shape[1], h / dg.shape[0]
         to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
         H = to_d @ grid.H

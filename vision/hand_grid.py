@@ -18,13 +18,14 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
    band (strokes of the other family spread flat). Peaks are linked from band to band,
    allowing drift (perspective, waves) and gaps (faint or broken pen): a track is a
    polyline that may bend. A family of eight or more evenly spaced long tracks is ruled or
-   graph paper: only tracks with 1.5x the rules' ink stay candidates, and the rules' ink
-   (:attr:`HashGrid.rules`) is cleared from the cells unless it is twice as dark.
+   graph paper: the '#' is first sought in the ink darker than 1.6x the rules' (where its lines
+   stand alone), else only tracks with 1.5x the rules' ink or another colour stay candidates;
+   the rules' ink (:attr:`HashGrid.rules`) is cleared from the cells unless twice as dark.
 4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
    pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
    in size, and each line should run on past its outer crossings (the outer cells). The
-   score favours long, strongly inked, regular '#'s with arms; the best wins. A frame line
-   is never chosen as an interior one: the other lines stop at it, so it has no arms.
+   score favours long, strongly inked, regular '#'s with arms, in one pen's colour; the best
+   wins. A frame line is never an interior one: the other lines stop at it (no arms).
 
 The result is the lattice of the crossings (a homography, cells of the '#' at 1..n-1) and the
 chosen tracks, which the reader erases from the ink before reading the cells.
@@ -40,6 +41,7 @@ import cv2
 import numpy as np
 
 from .errors import NoBoardError
+from .ink import angle_deg, colour_at, ink_threshold, unit
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
 
@@ -60,12 +62,12 @@ class Track:
     frame: tuple[np.ndarray, np.ndarray] | None = None  # (turning affine, turned mask) it was traced in
     ink: float = 0.0  # darkness summed across the stroke (px x darkness), mean over its bands
     dense: np.ndarray | None = None  # traced every 2 px, once chosen
+    colour: np.ndarray | None = None  # unit RGB darkness of its ink (:func:`~kinegym.vision.ink.ink_colour`)
 
     @property
     def span(self) -> float:
         """End-to-end distance (px): a track that zigzags between strokes gains nothing."""
         return float(np.hypot(*(self.pts[-1] - self.pts[0])))
-
 
 
 @dataclass
@@ -87,18 +89,14 @@ class HashGrid:
     rules: np.ndarray | None = None  # uint8 mask of ruled paper's lines, if the paper is ruled
 
 
-def ink_mask(d: np.ndarray, share: float = 0.22) -> tuple[np.ndarray, float, float]:
+def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0) -> tuple[np.ndarray, float, float]:
     """The ink mask of a darkness map (uint8 0/1), its threshold and the stroke width (px).
 
     The threshold is the larger of the map's noise level (median + 6 robust sigmas) and
     ``share`` of its strong ink (the 99.7th percentile); a pixel joins the mask also at 60 % of that
     level when it touches a pixel above it (hysteresis: a faint stretch of a line stays
     connected)."""
-    sample = d[::2, ::2].ravel()
-    med = float(np.median(sample))
-    mad = float(np.median(np.abs(sample - med))) * 1.4826
-    top = float(np.percentile(sample, 99.7))
-    t = max(med + 6.0 * mad, share * top, 0.035)
+    t = max(ink_threshold(d, share), above)
     hi = (d > t).astype(np.uint8)
     lo = (d > 0.6 * t).astype(np.uint8)
     # hysteresis: low pixels within a pixel of high ones
@@ -251,12 +249,19 @@ def _is_ruled(tracks: list[Track], side: float) -> bool:
 
 
 def _without_rules(tracks: list[Track], side: float) -> list[Track]:
-    """A ruled family's tracks (:func:`_is_ruled`) less the printed rules: the grid is drawn
-    with more ink, so only tracks with at least 1.5x the median ink of the long ones stay.
-    With fewer than two long tracks left the family is kept as it is."""
-    ink = float(np.median([t.ink for t in tracks if t.span >= 0.25 * side]))
-    keep = [t for t in tracks if t.ink >= 1.5 * ink]
+    """A ruled family's tracks (:func:`_is_ruled`) less the printed rules: tracks with 1.5x the
+    long ones' median ink, or more than :data:`_HUE_DEG` off their colour (another pen), stay;
+    with fewer than two long tracks left the family is kept as it is."""
+    long = [t for t in tracks if t.span >= 0.25 * side]
+    ink = float(np.median([t.ink for t in long]))
+    hue = unit(np.median([t.colour for t in long], axis=0)) if long[0].colour is not None else None
+    keep = [t for t in tracks if t.ink >= 1.5 * ink or (hue is not None and angle_deg(t.colour, hue) > _HUE_DEG)]
     return keep if sum(t.span >= 0.25 * side for t in keep) >= 2 else tracks
+
+
+#: Pens of one '#' differ by less than this in ink colour (deg between RGB darkness vectors);
+#: rules this far off the drawn lines' colour are another pen's.
+_HUE_DEG = 12.0
 
 
 def _rules(mask: np.ndarray, phis: list[float], length: int) -> np.ndarray:
@@ -378,6 +383,7 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
         return bool(p[0] < m or p[1] < m or p[0] > w - m or p[1] > h - m)
 
     share_a, share_b = _sharing(fa, width), _sharing(fb, width)
+    hue = np.array([t.colour for t in fa + fb]) if fa[0].colour is not None else None
     best = None
     for ca in itertools.combinations(range(len(fa)), k):
         if any(share_a[i, j] for i, j in itertools.combinations(ca, 2)):
@@ -437,27 +443,34 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             outside = (pos_a < ext - 2).sum() + (pos_b < ext - 2).sum()
             score -= 0.1 * outside
             score -= 0.3 * (allsz.max() / allsz.min() - 1.0)
+            if hue is not None:  # one pen draws a '#': lines of another colour are something else
+                u = hue[list(ca) + [len(fa) + j for j in cb]]
+                spread = max(angle_deg(v, unit(u.sum(axis=0))) for v in u)
+                score -= 0.02 * max(0.0, spread - _HUE_DEG)
             if best is None or score > best[0]:
                 best = (score, tuple(ca[v] for v in oa), tuple(cb[v] for v in ob), pts)
     return best
 
 
-def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5)) -> HashGrid:
+def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
     threshold is first 22 % of the strongest ink (:func:`ink_mask`); when that finds no '#',
-    all ink above the noise is searched (pale grid lines beside black marks)."""
+    all ink above the noise is searched (pale grid lines beside black marks). ``colour``, the
+    map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets the lines' pen count: one
+    '#' is drawn in one colour, and rules of another colour are not its lines."""
     try:
-        return _find_hash_grid(d, sizes, 0.22)
+        return _find_hash_grid(d, sizes, 0.22, colour)
     except NoBoardError as first:
         try:
-            return _find_hash_grid(d, sizes, 0.0)
+            return _find_hash_grid(d, sizes, 0.0, colour)
         except NoBoardError:
             raise first from None
 
 
-def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float) -> HashGrid:
-    mask, t, width = ink_mask(d, share)
+def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
+                    above: float = 0.0) -> HashGrid:
+    mask, t, width = ink_mask(d, share, above)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
     phi_a, phi_b = _directions(mask, width)
@@ -468,10 +481,20 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float) -> Hash
         tr.frame = (Ma, rot_a)
     for tr in fb:
         tr.frame = (Mb, rot_b)
+    if colour is not None:
+        for tr in fa + fb:
+            tr.colour = colour_at(d, colour, tr.pts)
     side = float(max(d.shape))
     ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
+    try:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
+        if rules is not None and not above:
+            grid = _find_hash_grid(d, sizes, share, colour, 1.6 * float(np.median(d[rules > 0])))
+            grid.rules = rules if grid.rules is None else grid.rules | rules
+            return grid
+    except NoBoardError:
+        pass
     fa = _without_rules(fa, side) if ruled_a else fa
     fb = _without_rules(fb, side) if ruled_b else fb
     # the longest few of each family (symbol strokes make short tracks)
