@@ -194,9 +194,10 @@ class BoardReader:
         h, w = d.shape
         f = GRID_SIDE_PX / max(h, w)
         small = cv2.resize(rgb, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
-        dg = ink_map(small, stroke_px=max(6.0, math.hypot(*small.shape[:2]) / 100))
+        stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
+        dg = ink_map(small, stroke_px=stroke)
         sizes = (self.size,) if self.size is not None else (3, 5)
-        grid = find_hash_grid(dg, sizes, ink_colour(small, stroke_px=max(6.0, math.hypot(*small.shape[:2]) / 100)))
+        grid = find_hash_grid(dg, sizes, ink_colour(small, stroke_px=stroke))
         fx, fy = w / dg.shape[1], h / dg.shape[0]
         to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
         H = to_d @ grid.H

@@ -445,7 +445,7 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             score -= 0.3 * (allsz.max() / allsz.min() - 1.0)
             if hue is not None:  # one pen draws a '#': lines of another colour are something else
                 u = hue[list(ca) + [len(fa) + j for j in cb]]
-                spread = max(angle_deg(v, unit(u.sum(axis=0))) for v in u)
+                spread = math.degrees(math.acos(float(np.clip((u @ unit(u.sum(axis=0))).min(), -1.0, 1.0))))
                 score -= 0.02 * max(0.0, spread - _HUE_DEG)
             if best is None or score > best[0]:
                 best = (score, tuple(ca[v] for v in oa), tuple(cb[v] for v in ob), pts)
