@@ -33,6 +33,7 @@ chosen tracks, which the reader erases from the ink before reading the cells.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 from dataclasses import dataclass
@@ -488,13 +489,11 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
-    try:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
-        if rules is not None and not above:
+    if rules is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
+        with contextlib.suppress(NoBoardError):
             grid = _find_hash_grid(d, sizes, share, colour, 1.6 * float(np.median(d[rules > 0])))
             grid.rules = rules if grid.rules is None else grid.rules | rules
             return grid
-    except NoBoardError:
-        pass
     fa = _without_rules(fa, side) if ruled_a else fa
     fb = _without_rules(fb, side) if ruled_b else fb
     # the longest few of each family (symbol strokes make short tracks)
