@@ -44,7 +44,7 @@ Units: cm, kg, s, radians in the API; forces in N and torques in N cm in the con
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -298,11 +298,13 @@ class PhysicsClimber(ClimberSim):
             m_e.max_force = min(te_max, ks * abs(err_e) + floor_e)
         self._prev_targets = self.targets
 
-    def _run(self, steps: int, schedule: object, stall: bool = True) -> str | None:
+    def _run(self, steps: int, schedule: object, stall: bool = True,
+             until: Callable[[], str | None] | None = None) -> str | None:
         """Step ``steps`` times; ``schedule(t)`` updates the targets first. Returns
         ``"grip_lost"`` / ``"fell"`` if a gripper let go (and how many are left),
         ``"torque_limit"`` if a servo stayed at its torque limit for ``stall_s`` (a stalled
-        servo: the move is stopped, as a servo's current limit would), else None."""
+        servo: the move is stopped, as a servo's current limit would), what ``until()`` says
+        once it says something (checked every step), else None."""
         p = self.model.phys
         hold = p.holding_force_n * 100.0
         dt = self.dt
@@ -319,6 +321,8 @@ class PhysicsClimber(ClimberSim):
                 if j is not None and j.impulse / dt > hold:
                     self._release(k)
                     return "fell" if sum(g is not None for g in self.grips) < 2 else "grip_lost"
+            if until is not None and (said := until()):
+                return said
             if stall:
                 for k in range(3):
                     for n in range(2):
@@ -396,11 +400,12 @@ class PhysicsClimber(ClimberSim):
             targets[arm] = self._ik_all(self.pose, hs)[arm]
             self.targets = targets
 
-        lost = self._run(n_swing, swing)
-        if lost == "torque_limit":  # a servo stalled: the hand goes back to its hole
+        lost = self._run(n_swing, swing, until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
+        if lost in ("torque_limit", "sagged"):  # a servo stalled, or the body sags: the hand goes back to its hole
+            what = f"{self.stalled} stalled" if lost == "torque_limit" else \
+                f"the body sagged {p.sag_abort_cm:g} cm (a holding servo gave way)"
             return self._swing_back(arm, swing, n_swing, old, result, "torque_limit",
-                                    f"{self.stalled} stalled while arm {arm + 1} swung; the hand went back to "
-                                    "its hole")
+                                    f"{what} while arm {arm + 1} swung; the hand went back to its hole")
         if lost:
             return result(lost, f"a gripper let go while arm {arm + 1} swung", "swing")
         captured = self._wait_capture(arm, new, 0.6)
@@ -457,7 +462,14 @@ class PhysicsClimber(ClimberSim):
         works, a fall if it does not."""
         old = tuple(self.holes.xy[self.stance[arm]])
         phase = "reach" if outcome == "missed_hole" else "swing"
-        lost = self._run(n_swing, lambda t: swing(t, frm, old, True), stall=False)  # type: ignore[operator]
+        cap = self.model.phys.capture_radius_cm
+
+        def home() -> str | None:  # the hand grips as soon as it is back, not when the path ends
+            tx, ty = self._tip(arm)
+            return "home" if math.hypot(tx - old[0], ty - old[1]) <= cap else None
+
+        lost = self._run(n_swing, lambda t: swing(t, frm, old, True), stall=False, until=home)  # type: ignore[operator]
+        lost = None if lost == "home" else lost
         if lost:
             return result(lost, f"{reason}; a gripper let go on the way", phase)  # type: ignore[operator]
         back = self._wait_capture(arm, old, 0.6)
