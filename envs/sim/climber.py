@@ -33,10 +33,11 @@ Two implementations share :class:`ClimberSim`'s interface (``reset``, ``move``,
 
 Outcomes (:data:`OUTCOMES`): ``ok``, ``unreachable``, ``torque_limit``, ``missed_hole``,
 ``grip_lost``, ``fell`` (fewer than two grips). A failed move leaves the robot on its
-previous holes where it can (the swinging hand goes back to its hole); only a fall ends a
-climb. Encoders read the joint angles with Gaussian noise (``sensor_sigma_deg``, what the
-localiser assumes too) and quantisation from the robot's YAML; the robot never sees its
-true pose.
+previous holes where it can: a swing stops when a servo stalls or the body sags
+``sag_abort_cm`` off its holds, and the swinging hand goes back and grips its hole the
+moment it is within the capture radius; only a fall ends a climb. Encoders read the joint
+angles with Gaussian noise (``sensor_sigma_deg``, what the localiser assumes too) and
+quantisation from the robot's YAML; the robot never sees its true pose.
 
 Units: cm, kg, s, radians in the API; forces in N and torques in N cm in the config.
 """

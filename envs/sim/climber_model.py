@@ -54,7 +54,7 @@ class ClimberPhysics:
     reach_margin_cm: float = _spec(0.5, lo_open=False)
     torque_safety: float = _spec(0.85, hi=2.0)
     stall_s: float = _spec(0.5, doc="a servo at its limit this long stalls (s)")
-    sag_abort_cm: float = _spec(2.0, doc="a swing stops when a holding hand's servo targets miss its hole by "
+    sag_abort_cm: float = _spec(2.5, doc="a swing stops when a holding hand's servo targets miss its hole by "
                                          "this much (the body is sagging)")
     shift_speed_cm_s: float = _spec(4.0)
     shift_servo_share: float = _spec(0.6, hi=1.0, doc="a body shift asks no joint for more than this share of "
