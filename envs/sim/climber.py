@@ -463,13 +463,9 @@ class PhysicsClimber(ClimberSim):
         works, a fall if it does not."""
         old = tuple(self.holes.xy[self.stance[arm]])
         phase = "reach" if outcome == "missed_hole" else "swing"
-        cap = self.model.phys.capture_radius_cm
-
-        def home() -> str | None:  # the hand grips as soon as it is back, not when the path ends
-            tx, ty = self._tip(arm)
-            return "home" if math.hypot(tx - old[0], ty - old[1]) <= cap else None
-
-        lost = self._run(n_swing, lambda t: swing(t, frm, old, True), stall=False, until=home)  # type: ignore[operator]
+        # the hand grips as soon as it is back, not when the path ends
+        lost = self._run(n_swing, lambda t: swing(t, frm, old, True), stall=False,  # type: ignore[operator]
+                         until=lambda: "home" if self._at_hole(arm, old) else None)
         lost = None if lost == "home" else lost
         if lost:
             return result(lost, f"{reason}; a gripper let go on the way", phase)  # type: ignore[operator]
@@ -506,21 +502,16 @@ class PhysicsClimber(ClimberSim):
                 return True
         return False
 
-    def _wait_capture(self, arm: int, hole_xy: tuple[float, float], seconds: float) -> bool | str:
-        """Let the hand settle up to ``seconds``; True once it is within the capture radius."""
-        cap = self.model.phys.capture_radius_cm
-        hold = self.model.phys.holding_force_n * 100.0
-        for _ in range(int(seconds / self.dt)):
-            tx, ty = self._tip(arm)
-            if math.hypot(tx - hole_xy[0], ty - hole_xy[1]) <= cap:
-                return True
-            self._control()
-            self.space.step(self.dt)
-            self.total_steps += 1
-            for k in range(3):
-                j = self.grips[k]
-                if j is not None and j.impulse / self.dt > hold:
-                    self._release(k)
-                    return "fell" if self._hold() < 2 else "grip_lost"
+    def _at_hole(self, arm: int, hole_xy: tuple[float, float]) -> bool:
+        """Is arm ``arm``'s hand within the capture radius of ``hole_xy``?"""
         tx, ty = self._tip(arm)
-        return math.hypot(tx - hole_xy[0], ty - hole_xy[1]) <= cap
+        return math.hypot(tx - hole_xy[0], ty - hole_xy[1]) <= self.model.phys.capture_radius_cm
+
+    def _wait_capture(self, arm: int, hole_xy: tuple[float, float], seconds: float) -> bool | str:
+        """Let the hand settle up to ``seconds``; True once it is within the capture radius,
+        ``"fell"`` / ``"grip_lost"`` if a gripper let go meanwhile."""
+        if self._at_hole(arm, hole_xy):
+            return True
+        said = self._run(int(seconds / self.dt), lambda t: None, stall=False,
+                         until=lambda: "home" if self._at_hole(arm, hole_xy) else None)
+        return True if said == "home" else said or False
