@@ -15,17 +15,22 @@ Photos: real-like 3 x 3 boards (:func:`~kinegym.envs.sim.scenes_real.real_like_s
 from 1,000,000) and hard rendered 3 x 3 and 5 x 5 boards
 (:func:`~kinegym.envs.sim.scenes.random_scene`, seeds from 2,000,000); the benchmark's seeds
 (below 500,000) are never trained on. The same arguments give the same model, bit for bit.
+``--cells FILE`` keeps the collected cells (the slow part: rendering and reading the photos)
+and reuses them when the same photos are asked for again, so that fitting can be varied in
+seconds.
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import multiprocessing as mp
 import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -33,9 +38,10 @@ from kinegym.vision.board_reader import BoardReader, NoBoardError
 from kinegym.vision.cell_model import N_INPUTS, SHIPPED_MODEL, CellModel, dihedral, rule_probs
 from kinegym.vision.ink import _apply
 
-__all__ = ["CellData", "grid_is_right", "collect", "fit", "expected_calibration_error", "main"]
+__all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "expected_calibration_error", "main"]
 
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
+_MAX_CACHE_BYTES = 2 << 30  # 100,000 photos' cells, compressed, stay well under this
 
 
 class _Ticker:
@@ -130,6 +136,37 @@ def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) 
     return CellData(np.concatenate(xs), np.concatenate(ys), np.concatenate(ids), len(xs), len(jobs))
 
 
+def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 2, progress: bool = True
+                    ) -> CellData:
+    """The cells of :func:`collect`, kept in ``path`` (.npz): read back when the file holds the
+    cells of the same photos (counts and input width), else collected and written (atomically).
+    A file that is not such a cache is a :class:`~kinegym.configs.io.FileError` naming it."""
+    from kinegym.configs.io import FileError, read_bytes, write_atomic
+
+    p = Path(path)
+    if p.exists():
+        raw = read_bytes(p, _MAX_CACHE_BYTES, "cell cache (.npz)")
+        try:
+            with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+                a = {key: z[key] for key in z.files}
+            key = (int(a["real_like"]), int(a["hard"]), int(a["x"].shape[1]))
+            data = CellData(a["x"].astype(np.float32), a["y"].astype(np.int64), a["photo"].astype(np.int64),
+                            int(a["kept"]), int(a["photos"]))
+        except (KeyError, ValueError, OSError, EOFError, IndexError) as err:
+            raise FileError(p, f"not a cell cache ({err})", "an .npz written by --cells") from None
+        if key == (real_like, hard, N_INPUTS):
+            return data
+        if progress:
+            print(f"  {p} holds the cells of {key[0]} real-like + {key[1]} hard photos ({key[2]} inputs); collecting "
+                  f"{real_like} + {hard} ({N_INPUTS}) anew", file=sys.stderr)
+    data = collect(real_like, hard, workers, progress)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, x=data.x, y=data.y, photo=data.photo, kept=data.kept, photos=data.photos,
+                        real_like=real_like, hard=hard)
+    write_atomic(p, buf.getvalue(), suffixes=(".npz",), what="cell cache")
+    return data
+
+
 def _softmax(z: np.ndarray) -> np.ndarray:
     z = np.exp(z - z.max(axis=1, keepdims=True))
     return z / z.sum(axis=1, keepdims=True)
@@ -201,10 +238,12 @@ def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
 
 
 def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 96,
-          epochs: int = 30, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True
-          ) -> tuple[CellModel, dict[str, object]]:
-    """Collect, fit, calibrate (module docstring): the model and its report."""
-    data = collect(real_like, hard, workers, progress)
+          epochs: int = 30, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True,
+          cells: str | Path | None = None) -> tuple[CellModel, dict[str, object]]:
+    """Collect (or reuse ``cells``, see :func:`load_or_collect`), fit, calibrate (module
+    docstring): the model and its report."""
+    data = load_or_collect(cells, real_like, hard, workers, progress) if cells else collect(real_like, hard, workers,
+                                                                                          progress)
     if len(data.y) < 50:
         raise ValueError(f"{len(data.y)} cells from {data.photos} photos; expected at least 50 (render more photos)")
     rng = np.random.default_rng(seed)
@@ -241,6 +280,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="weight of the hand rule's log-probabilities, a prior (default 0.3; 0..10)")
     ap.add_argument("--workers", type=int, default=2, help="processes rendering photos (default 2)")
     ap.add_argument("--seed", type=int, default=0, help="split and initialisation seed (default 0)")
+    ap.add_argument("--cells", default=None, help="keep the collected cells in this .npz and reuse them when it "
+                    "holds the same photos' (default: not kept)")
     ap.add_argument("--out", default=str(SHIPPED_MODEL), help="the model file (.npz; default: the shipped one)")
     args = ap.parse_args(argv)
     for name in ("real_like", "hard", "hidden", "epochs", "workers"):
@@ -255,7 +296,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not 0 <= value <= hi:
             ap.error(f"--{name.replace('_', '-')} {value}; expected 0..{hi:g}")
     model, report = train(args.real_like, args.hard, workers=max(1, args.workers), hidden=max(1, args.hidden),
-                          epochs=args.epochs, decay=args.decay, rule_weight=args.rule_weight, seed=args.seed)
+                          epochs=args.epochs, decay=args.decay, rule_weight=args.rule_weight, seed=args.seed,
+                          cells=args.cells)
     path = write_atomic(args.out, model.to_bytes(), suffixes=(".npz",), what="cell model")
     print(json.dumps(report, indent=1))
     print(f"wrote {path}")

@@ -10,7 +10,15 @@ import cv2
 import numpy as np
 import pytest
 
-from kinegym.agents.train_cells import expected_calibration_error, fit, fit_temperature, grid_is_right, main
+from kinegym.agents.train_cells import (
+    expected_calibration_error,
+    fit,
+    fit_temperature,
+    grid_is_right,
+    load_or_collect,
+    main,
+)
+from kinegym.configs.io import FileError
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader, NoBoardError, VisionError
 from kinegym.vision.cell_model import CROPS, N_INPUTS, POOL, CellModel, cell_inputs, dihedral
@@ -87,6 +95,29 @@ def test_fit_learns_x_from_o_and_is_reproducible() -> None:
     model.temperature = fit_temperature(model, xt, yt)
     assert 0.25 <= model.temperature <= 8.0
     assert expected_calibration_error(model.probs(xt), yt) < 0.1
+
+
+def test_collected_cells_are_kept_and_reused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--cells``: the first call collects and writes, the second with the same photos reads the
+    file back (no photo rendered), other counts collect anew, and a file that is not a cache is
+    named."""
+    cache = tmp_path / "cells.npz"
+    first = load_or_collect(cache, 4, 1, workers=1, progress=False)
+    assert cache.exists() and first.photos == 5
+    import kinegym.agents.train_cells as tc
+
+    def no_render(*args: object, **kwargs: object) -> None:
+        raise AssertionError("collected again although the cache holds these photos")
+
+    monkeypatch.setattr(tc, "collect", no_render)
+    again = load_or_collect(cache, 4, 1, workers=1, progress=False)
+    np.testing.assert_array_equal(again.x, first.x)
+    np.testing.assert_array_equal(again.photo, first.photo)
+    with pytest.raises(AssertionError, match="collected again"):
+        load_or_collect(cache, 5, 1, workers=1, progress=False)
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(FileError, match="bad.npz"):
+        load_or_collect(tmp_path / "bad.npz", 4, 1, workers=1, progress=False)
 
 
 def test_a_model_file_round_trips_and_bad_files_are_named(tmp_path: Path) -> None:
