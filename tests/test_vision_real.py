@@ -3,13 +3,15 @@ photos, MIT licence, labelled by eye in ``labels.json``) and on the same photos 
 paler pens, much larger frames, a grid cut off by the picture's edge."""
 
 import json
+import warnings
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-from kinegym.vision.board_reader import BoardReader, debug_image
+from kinegym.envs.sim.scenes_real import real_like_scene
+from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.image_io import read_image
 
 DATA = Path(__file__).parent / "data" / "real"
@@ -98,3 +100,17 @@ def test_real_photos_on_graph_paper() -> None:
         return sum(matches(BoardReader(size=3).read(on_graph_paper(read_image(DATA / name), strength)).text(), label)
                    for name, label in LABELS.items())
     assert right(0.15) >= 11 and right(0.25) >= 3
+
+
+def test_a_ruling_with_no_straight_runs_reads_without_numeric_warnings() -> None:
+    """Real-like photo 1,003,349 (one the cell classifier trains on): its tracks look like a
+    ruling but hold no long straight run of ink, so there are no rules to set a level from. The
+    reader went on with the median of no pixels (NaN, numpy's "Mean of empty slice"); now it reads
+    the photo, or refuses it, with no numeric warning."""
+    sc = real_like_scene(1_003_349)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            BoardReader(size=3, model=None).read(sc.image)
+        except NoBoardError:
+            pass

@@ -488,7 +488,8 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     side = float(max(d.shape))
     ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
-    rules = _rules(mask, ruled, max(9, int(0.06 * side))) if ruled else None
+    # evenly spaced tracks with no long straight run of ink among them are no ruling to clear
+    rules = r if ruled and (r := _rules(mask, ruled, max(9, int(0.06 * side)))).any() else None
     if rules is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
         with contextlib.suppress(NoBoardError):
             grid = _find_hash_grid(d, sizes, share, colour, 1.6 * float(np.median(d[rules > 0])))
