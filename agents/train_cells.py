@@ -140,6 +140,7 @@ def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 
                     ) -> CellData:
     """The cells of :func:`collect`, kept in ``path`` (.npz): read back when the file holds the
     cells of the same photos (counts and input width), else collected and written (atomically).
+    The cells are what the reader of the time saw: after changing the reader, delete the file.
     A file that is not such a cache is a :class:`~kinegym.configs.io.FileError` naming it."""
     from kinegym.configs.io import FileError, read_bytes, write_atomic
 
@@ -281,7 +282,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2, help="processes rendering photos (default 2)")
     ap.add_argument("--seed", type=int, default=0, help="split and initialisation seed (default 0)")
     ap.add_argument("--cells", default=None, help="keep the collected cells in this .npz and reuse them when it "
-                    "holds the same photos' (default: not kept)")
+                    "holds the same photos' (default: not kept; delete it after changing the reader)")
     ap.add_argument("--out", default=str(SHIPPED_MODEL), help="the model file (.npz; default: the shipped one)")
     args = ap.parse_args(argv)
     for name in ("real_like", "hard", "hidden", "epochs", "workers"):
