@@ -157,9 +157,10 @@ def _new_run_dir(base: Path, stem: str) -> Path:
     raise RuntimeError(f"no free run directory under {base}")
 
 
-def _time_limit(minutes: float | None) -> list[Any]:
+def _time_limit(minutes: float | None, start: float | None = None) -> list[Any]:
     """A callback that ends training cleanly (final model saved) after ``minutes`` of wall
-    time; none for None."""
+    time counted from ``start`` (a ``time.monotonic()`` reading; None: when learning starts),
+    so that a warm start counts against the budget too; none for None."""
     if minutes is None:
         return []
     if not minutes > 0:
@@ -168,7 +169,7 @@ def _time_limit(minutes: float | None) -> list[Any]:
 
     class TimeLimit(BaseCallback):
         def _on_training_start(self) -> None:
-            self.deadline = time.monotonic() + 60.0 * float(minutes)
+            self.deadline = (time.monotonic() if start is None else start) + 60.0 * float(minutes)
 
         def _on_step(self) -> bool:
             return time.monotonic() < self.deadline
@@ -238,7 +239,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     after every update (rollout success and lengths, losses, fps)."""
     from kinegym.agents.atomic_save import AtomicMaskablePPO, AtomicVecNormalize
 
-    limit = _time_limit(minutes)  # (checks minutes before anything is made)
+    limit = _time_limit(minutes, start=time.monotonic())  # (checks minutes before anything is made)
     cfg = load_train_config(config)
     cfg.update(overrides or {})
     if timesteps is not None:
@@ -262,6 +263,8 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
     try:
         model = AtomicMaskablePPO(cfg["policy"], env, seed=seed, verbose=verbose, tensorboard_log=str(run / "tb"),
                                   device="cpu", **_model_kwargs(cfg))
+        if cfg["bc_episodes"]:
+            _warm_start(model, cfg, seed, make_env, run)
         cbs = (_callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
                + _step_hook(progress))
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, tb_log_name="run")
@@ -272,6 +275,31 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
         env.close()
     learning_curve(run)
     return run
+
+
+def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, run: Path) -> dict[str, Any]:
+    """Clone ``cfg["bc_episodes"]`` planner climbs on the training tasks into ``model``'s policy
+    (:mod:`kinegym.agents.pretrain`); what it measured goes to ``run/pretrain.yaml``."""
+    from kinegym.agents.pretrain import clone, planner_demos
+
+    t0 = time.monotonic()
+    env_kwargs = dict(cfg["env_kwargs"])
+    if env_kwargs.get("wall_pool"):
+        env_kwargs.setdefault("wall_pool_seed", int(seed))  # the training envs' pool
+    demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"])
+    t1 = time.monotonic()
+    stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
+                  vf_coef=cfg["vf_coef"], seed=seed)
+    out = {"episodes": demos.episodes, "climbed": demos.climbed, "moves": len(demos),
+           "demo_seconds": round(t1 - t0, 1), "clone_seconds": round(time.monotonic() - t1, 1),
+           **{k: round(float(v), 4) for k, v in stats.items() if k != "moves"}}
+    _configs.write_atomic(run / "pretrain.yaml", yaml.safe_dump(out, sort_keys=False))
+    return out
+
+
+#: the planner's demonstration climbs reset their env from ``seed + _BC_SEED_OFFSET`` (the
+#: training envs use ``seed`` and ``seed + 1``: another draw of the same pool's tasks)
+_BC_SEED_OFFSET = 7919
 
 
 def _saved_steps(model_zip: Path) -> int:

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit, out_dir
+from kinegym.configs import load_yaml
 
 __all__ = ["add_parsers"]
 
@@ -68,12 +69,21 @@ def cmd_train(args: argparse.Namespace) -> int:
             _say(args, f"train: {steps:,} env steps on {cfg['n_envs']} envs, an evaluation of "
                        f"{cfg['eval_episodes']} walls every {cfg['eval_freq']:,} steps: about "
                        f"{_minutes(est)} here ({sps:.0f} env steps/s measured){limit}")
+            if cfg["bc_episodes"]:
+                _say(args, f"warm start: the planner climbs {cfg['bc_episodes']:,} training tasks first and the policy "
+                           f"is fitted to its moves (about {_minutes(0.12 * cfg['bc_episodes'])}, inside --minutes)")
         with Progress(steps, "train", enabled=show) as bar:
             run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=bar.update,
                           command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose,
                           mode=args.mode)
     files = sorted(str(p.relative_to(run)) for p in run.rglob("*") if p.is_file() and "tb" not in p.parts)
     lines = [f"run directory: {run}"] + [f"  {f}" for f in files if not f.startswith("monitor/")]
+    pre = run / "pretrain.yaml"
+    if pre.is_file():
+        got = load_yaml(pre)
+        lines.append(f"warm start: {got['climbed']:,} planner climbs, {got['moves']:,} moves cloned in "
+                     f"{got['demo_seconds'] + got['clone_seconds']:.0f} s; the policy then chose the planner's move "
+                     f"on {got['agreement']:.0%} of them")
     curve = run / "learning_curve.png"
     if curve.is_file():
         lines.append(f"learning curve: {curve}")

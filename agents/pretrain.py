@@ -1,0 +1,140 @@
+"""A warm start for the gait policy: behaviour cloning from the planner's climbs.
+
+PPO from scratch spends most of a 15-minute budget learning what a climb looks like; the
+planner (:class:`kinegym.agents.gait_planner.PlannerAgent`) already climbs every training
+wall. ``kinegym train gait`` with ``bc_episodes: N`` in the config first lets the planner
+climb ``N`` training tasks in the training env (same ids, same pool, same observations,
+masks and rewards), then fits the MaskablePPO policy to those climbs before PPO starts:
+
+* the action head by the masked log-likelihood of the planner's moves
+  (``policy.evaluate_actions(obs, actions, action_masks)``, as MaskablePPO itself scores
+  actions), so the policy starts out climbing;
+* the value head by regression on each climb's discounted return (the config's ``gamma``),
+  so PPO's first advantages are not measured against an untrained critic, which would
+  undo the cloned moves in the first updates.
+
+PPO then learns from there as usual; the planner is never consulted again (not in
+training's later phase, not at evaluation: the policy acts from its observations alone).
+The planner is weighted A*, so its climbs are good, not optimal: the policy can improve on
+them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class Demos:
+    """The planner's climbs as arrays: one row per move (observations, actions, the env's
+    masks, and the discounted return from that move on)."""
+
+    obs: np.ndarray
+    actions: np.ndarray
+    masks: np.ndarray
+    returns: np.ndarray
+    episodes: int
+    climbed: int
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+
+def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], episodes: int, seed: int, gamma: float,
+                  progress: Callable[[int], None] | None = None) -> Demos:
+    """``episodes`` climbs of the planner in ``make_env(**env_kwargs)``, the first reset seeded
+    ``seed`` (a pool env then draws its tasks from its own seeded generator, as in training).
+    Episodes in which the planner finds no route from where the robot is are kept up to there
+    (rare: walls are accepted only with a route). ``progress(1)`` after each episode."""
+    from kinegym.agents.gait_planner import PlannerAgent
+
+    if episodes < 1:
+        raise ValueError(f"episodes={episodes!r}; expected >= 1")
+    if not 0.0 <= gamma <= 1.0:
+        raise ValueError(f"gamma={gamma!r}; expected 0..1")
+    env = make_env(**env_kwargs)
+    obs_rows: list[np.ndarray] = []
+    acts: list[int] = []
+    masks: list[np.ndarray] = []
+    rets: list[float] = []
+    climbed = 0
+    try:
+        obs, info = env.reset(seed=int(seed))
+        for _ in range(episodes):
+            agent = PlannerAgent()
+            rewards: list[float] = []
+            done = False
+            while not done:
+                a = agent.act(env.unwrapped, obs)
+                if a is None:
+                    break
+                obs_rows.append(np.asarray(obs, dtype=np.float32))
+                masks.append(np.asarray(info["action_mask"], dtype=bool))
+                acts.append(int(a))
+                obs, r, term, trunc, info = env.step(a)
+                rewards.append(float(r))
+                done = term or trunc
+            climbed += bool(done and info.get("is_success", False))
+            g, back = 0.0, []
+            for r in reversed(rewards):
+                g = r + gamma * g
+                back.append(g)
+            rets.extend(reversed(back))
+            obs, info = env.reset()
+            if progress is not None:
+                progress(1)
+    finally:
+        env.close()
+    n_obs = int(np.prod(env.observation_space.shape))
+    return Demos(np.asarray(obs_rows, np.float32).reshape(-1, n_obs), np.asarray(acts, np.int64),
+                 np.asarray(masks, bool).reshape(len(acts), -1), np.asarray(rets, np.float32), episodes, climbed)
+
+
+def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr: float = 1e-3,
+          vf_coef: float = 0.5, seed: int = 0) -> dict[str, float]:
+    """Fit a MaskablePPO ``policy`` to ``demos``: the masked negative log-likelihood of the
+    planner's moves plus ``vf_coef`` times the squared error of the value head on the
+    returns, ``epochs`` passes in shuffled batches (a seeded torch generator) with Adam.
+    Returns the last epoch's mean losses and the share of demo moves the policy's greedy
+    (masked) choice now matches."""
+    import torch as th
+
+    if len(demos) == 0:
+        raise ValueError("no demonstration moves to clone (the planner found no route on any task)")
+    if epochs < 1 or batch_size < 1:
+        raise ValueError(f"epochs={epochs!r}, batch_size={batch_size!r}; expected >= 1 each")
+    dev = policy.device
+    obs = th.as_tensor(demos.obs, device=dev)
+    act = th.as_tensor(demos.actions, device=dev)
+    ret = th.as_tensor(demos.returns, device=dev)
+    masks = demos.masks
+    opt = th.optim.Adam(policy.parameters(), lr=lr)
+    gen = th.Generator().manual_seed(int(seed))
+    n = len(demos)
+    policy.set_training_mode(True)
+    nll_sum = vf_sum = 0.0
+    for _ in range(epochs):
+        order = th.randperm(n, generator=gen)
+        nll_sum = vf_sum = 0.0
+        for i in range(0, n, batch_size):
+            idx = order[i:i + batch_size]
+            values, log_prob, _ = policy.evaluate_actions(obs[idx], act[idx], action_masks=masks[idx.numpy()])
+            nll = -log_prob.mean()
+            vf = th.nn.functional.mse_loss(values.flatten(), ret[idx])
+            loss = nll + vf_coef * vf
+            opt.zero_grad()
+            loss.backward()
+            th.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
+            opt.step()
+            nll_sum += nll.item() * len(idx)
+            vf_sum += vf.item() * len(idx)
+    policy.set_training_mode(False)
+    with th.no_grad():
+        dist = policy.get_distribution(obs, action_masks=masks)
+        greedy = dist.get_actions(deterministic=True)
+    return {"nll": nll_sum / n, "value_mse": vf_sum / n, "agreement": float((greedy == act).float().mean()),
+            "moves": float(n)}

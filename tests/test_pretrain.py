@@ -1,0 +1,69 @@
+"""The gait policy's warm start: the planner's climbs are recorded from the training env as it
+is (observations, masks, rewards), and cloning them makes the policy choose the planner's moves."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from kinegym.agents import train as T
+from kinegym.agents.pretrain import Demos, clone, planner_demos
+
+KW = {"mode": "kinematic", "memory": True, "hints": True, "wall_pool": 6, "wall_pool_seed": 0}
+
+
+@pytest.fixture(scope="module")
+def demos() -> Demos:
+    return planner_demos(T.make_env, KW, episodes=6, seed=5, gamma=0.98)
+
+
+def test_the_planner_s_climbs_are_recorded_as_the_env_gives_them(demos: Demos) -> None:
+    assert demos.episodes == 6 and demos.climbed == 6  # pool walls are accepted only with a route
+    n = len(demos)
+    assert n >= 6 * 3 and demos.obs.shape == (n, 142) and demos.masks.shape == (n, 24)
+    assert demos.masks[np.arange(n), demos.actions].all()  # every recorded move was one the env offered
+    # the observation's own mask part is the recorded mask (the rows line up with their moves)
+    lay = T.make_env(**KW).unwrapped.layout
+    assert np.array_equal(demos.obs[:, lay["action_mask"]] > 0.5, demos.masks)
+    # discounted returns: each climb ends with the +10 of the goal, so the last move's return is its reward
+    assert np.isfinite(demos.returns).all() and (demos.returns > 5.0).sum() >= 6
+    with pytest.raises(ValueError, match="episodes=0"):
+        planner_demos(T.make_env, KW, episodes=0, seed=0, gamma=0.98)
+
+
+def test_cloning_makes_the_policy_choose_the_planner_s_moves(demos: Demos) -> None:
+    from sb3_contrib import MaskablePPO
+
+    model = MaskablePPO("MlpPolicy", T.make_env(**KW), seed=0, device="cpu", policy_kwargs={"net_arch": [64, 64]})
+    before = clone(model.policy, demos, epochs=1, lr=1e-12)["agreement"]  # a step too small to change anything
+    after = clone(model.policy, demos, epochs=60, batch_size=64, seed=0)
+    assert after["agreement"] >= 0.9 > before + 0.2, (before, after)
+    assert after["value_mse"] < 4.0  # the critic learnt the climbs' returns (they span about 0..12)
+    with pytest.raises(ValueError, match="epochs=0"):
+        clone(model.policy, demos, epochs=0)
+
+
+def test_train_gait_with_a_warm_start_announces_and_records_it(tmp_path: Path) -> None:
+    default = Path(T.__file__).parents[1] / "configs" / "train" / "hole_climb_maskable_ppo.yaml"
+    base = yaml.safe_load(default.read_text())
+    (section,) = base.values()
+    section.update({"n_envs": 1, "n_timesteps": 128, "n_steps": 64, "batch_size": 64, "n_epochs": 1,
+                    "eval_freq": 10**6, "eval_episodes": 1, "checkpoint_freq": 10**6,
+                    "policy_kwargs": {"net_arch": [32, 32]}, "bc_episodes": 3, "bc_epochs": 2,
+                    "env_kwargs": {"mode": "kinematic", "wall_pool": 4}})
+    cfg = tmp_path / "bc.yaml"
+    cfg.write_text(yaml.safe_dump(base))
+    done = subprocess.run([sys.executable, "-m", "kinegym", "train", "gait", "--config", str(cfg), "--seed", "1",
+                           "--out", str(tmp_path / "runs")], capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "warm start: the planner climbs 3 training tasks first" in done.stderr
+    run = tmp_path / "runs" / "gait-seed1"
+    got = yaml.safe_load((run / "pretrain.yaml").read_text())
+    assert got["episodes"] == 3 and got["climbed"] == 3 and got["moves"] >= 9
+    assert 0.0 <= got["agreement"] <= 1.0 and (run / "final_model.zip").is_file()
+    assert f"warm start: 3 planner climbs, {got['moves']} moves cloned in" in done.stdout
