@@ -21,6 +21,9 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   model of ``RUN`` (last checkpoint, or the final model of a ``--minutes`` stop) into a new
   directory ``RUN-resume<k>``; nothing of ``RUN`` is touched. ``--mode physics`` with it is a
   physics fine-tuning phase (the envs simulate every move in pymunk from then on).
+* **Warm start** (``bc_episodes: N`` in the config, default 0): before PPO the planner climbs
+  ``N`` training tasks and the policy and its critic are fitted to those climbs
+  (:mod:`kinegym.agents.pretrain`); the time counts against ``--minutes``.
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
   (fast: route checks and move judgements are kept); the evaluation callback uses fresh

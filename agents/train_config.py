@@ -148,9 +148,9 @@ TRAIN_SCHEMA: dict[str, _configs.Spec] = {
     "eval_episodes": _N(lo=1, integer=True, default=40),
     "checkpoint_freq": _N(lo=1, integer=True, default=50_000, doc="env steps (all envs) between checkpoints"),
     "torch_threads": _N(lo=1, hi=64, integer=True, default=1),
-    "bc_episodes": _N(lo=0, integer=True, default=0,
+    "bc_episodes": _N(lo=0, hi=100_000, integer=True, default=0,
                       doc="planner climbs cloned into the policy before PPO starts (0: none; agents.pretrain)"),
-    "bc_epochs": _N(lo=1, integer=True, default=10, doc="passes over the planner's climbs when cloning them"),
+    "bc_epochs": _N(lo=1, hi=1000, integer=True, default=10, doc="passes over the planner's climbs when cloning them"),
 }
 
 

@@ -37,7 +37,8 @@ import numpy as np
 import yaml
 
 SMALL = {"n_envs": 1, "n_timesteps": 4096, "n_steps": 64, "batch_size": 64, "n_epochs": 2, "eval_freq": 512,
-         "eval_episodes": 2, "checkpoint_freq": 256, "policy_kwargs": {"net_arch": [32, 32]}}
+         "eval_episodes": 2, "checkpoint_freq": 256, "policy_kwargs": {"net_arch": [32, 32]},
+         "bc_episodes": 0}  # kills land in PPO's saves, not in the warm start
 
 
 def _config(folder: Path) -> Path:
