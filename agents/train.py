@@ -23,7 +23,8 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   physics fine-tuning phase (the envs simulate every move in pymunk from then on).
 * **Warm start** (``bc_episodes: N`` in the config, default 0): before PPO the planner climbs
   ``N`` training tasks and the policy and its critic are fitted to those climbs
-  (:mod:`kinegym.agents.pretrain`); the time counts against ``--minutes``.
+  (:mod:`kinegym.agents.pretrain`; in kinematic mode, also for a physics run); the time counts
+  against ``--minutes``.
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
   (fast: route checks and move judgements are kept); the evaluation callback uses fresh
@@ -122,15 +123,22 @@ def _make_vec(cfg: dict[str, Any], n_envs: int, seed: int, monitor_dir: Path | N
         kwargs = {"vec_env_cls": SubprocVecEnv, "vec_env_kwargs": {"start_method": "forkserver"}}
     else:
         kwargs = {"vec_env_cls": DummyVecEnv}
-    env_kwargs = dict(cfg["env_kwargs"])
-    if pool_seed is None:
-        for key in _POOL_KEYS:
-            env_kwargs.pop(key, None)
-    elif env_kwargs.get("wall_pool"):
-        env_kwargs.setdefault("wall_pool_seed", int(pool_seed))
+    env_kwargs = _pool_kwargs(cfg["env_kwargs"], pool_seed)
     return make_vec_env(make, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs,
                         monitor_dir=str(monitor_dir) if monitor_dir else None,
                         monitor_kwargs={"info_keywords": ("is_success",)}, **kwargs)
+
+
+def _pool_kwargs(env_kwargs: dict[str, Any], pool_seed: int | None) -> dict[str, Any]:
+    """``env_kwargs`` for fresh walls (``pool_seed`` None: the pool keys dropped) or for the
+    config's wall pool made from ``pool_seed`` unless the config names its own ``wall_pool_seed``."""
+    out = dict(env_kwargs)
+    if pool_seed is None:
+        for key in _POOL_KEYS:
+            out.pop(key, None)
+    elif out.get("wall_pool"):
+        out.setdefault("wall_pool_seed", int(pool_seed))
+    return out
 
 
 def _model_kwargs(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -286,9 +294,9 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     from kinegym.agents.pretrain import clone, planner_demos
 
     t0 = time.monotonic()
-    env_kwargs = dict(cfg["env_kwargs"])
-    if env_kwargs.get("wall_pool"):
-        env_kwargs.setdefault("wall_pool_seed", int(seed))  # the training envs' pool
+    # the training envs' tasks, climbed in kinematic mode even for a physics run (the same
+    # observations and moves; physics would make the demonstrations a hundred times slower)
+    env_kwargs = {**_pool_kwargs(cfg["env_kwargs"], seed), "mode": "kinematic"}
     demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"])
     t1 = time.monotonic()
     stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
@@ -299,6 +307,9 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     _configs.write_atomic(run / "pretrain.yaml", yaml.safe_dump(out, sort_keys=False))
     return out
 
+
+#: about what one demonstration climb costs on a training task (planner, env, a pool task made): for estimates
+BC_SECONDS_PER_EPISODE = 0.14
 
 #: the planner's demonstration climbs reset their env from ``seed + _BC_SEED_OFFSET`` (the
 #: training envs use ``seed`` and ``seed + 1``: another draw of the same pool's tasks)

@@ -67,3 +67,25 @@ def test_train_gait_with_a_warm_start_announces_and_records_it(tmp_path: Path) -
     assert got["episodes"] == 3 and got["climbed"] == 3 and got["moves"] >= 9
     assert 0.0 <= got["agreement"] <= 1.0 and (run / "final_model.zip").is_file()
     assert f"warm start: 3 planner climbs, {got['moves']} moves cloned in" in done.stdout
+
+
+def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(monkeypatch: pytest.MonkeyPatch,
+                                                                           demos: Demos, tmp_path: Path) -> None:
+    import kinegym.agents.pretrain as P
+
+    seen: dict = {}
+
+    def fake_demos(make, env_kwargs, episodes, seed, gamma):  # noqa: ANN001, ANN202
+        seen.update(env_kwargs)
+        return demos
+
+    monkeypatch.setattr(P, "planner_demos", fake_demos)
+    from sb3_contrib import MaskablePPO
+
+    cfg = T.load_train_config()
+    cfg["env_kwargs"] = {**cfg["env_kwargs"], "mode": "physics"}
+    model = MaskablePPO("MlpPolicy", T.make_env(**KW), seed=0, device="cpu", policy_kwargs={"net_arch": [16]})
+    got = T._warm_start(model, cfg, seed=4, make=T.make_env, run=tmp_path)
+    # the training envs' pool (and observation: memory and hints), climbed kinematically
+    assert seen == {**cfg["env_kwargs"], "mode": "kinematic", "wall_pool": 2000, "wall_pool_seed": 4}
+    assert got["moves"] == len(demos) and (tmp_path / "pretrain.yaml").is_file()

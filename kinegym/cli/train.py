@@ -70,8 +70,9 @@ def cmd_train(args: argparse.Namespace) -> int:
                        f"{cfg['eval_episodes']} walls every {cfg['eval_freq']:,} steps: about "
                        f"{_minutes(est)} here ({sps:.0f} env steps/s measured){limit}")
             if cfg["bc_episodes"]:
+                bc_s = T.BC_SECONDS_PER_EPISODE * cfg["bc_episodes"]
                 _say(args, f"warm start: the planner climbs {cfg['bc_episodes']:,} training tasks first and the policy "
-                           f"is fitted to its moves (about {_minutes(0.12 * cfg['bc_episodes'])}, inside --minutes)")
+                           f"is fitted to its moves (about {_minutes(bc_s)}, inside --minutes)")
         with Progress(steps, "train", enabled=show) as bar:
             run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=bar.update,
                           command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose,
