@@ -44,13 +44,31 @@ class Demos:
         return len(self.actions)
 
 
+class _Recorder:
+    """An agent that lets ``inner`` act and keeps what it saw and chose (the observation,
+    the env's action mask, the action) for every move it made."""
+
+    def __init__(self, inner: Any, obs: list[np.ndarray], masks: list[np.ndarray], acts: list[int]) -> None:
+        self.inner, self.obs, self.masks, self.acts = inner, obs, masks, acts
+
+    def act(self, env: Any, obs: Any = None) -> int | None:
+        a = self.inner.act(env, obs)
+        if a is not None:
+            self.obs.append(np.asarray(obs, dtype=np.float32))
+            self.masks.append(np.asarray(env.action_masks(), dtype=bool))
+            self.acts.append(int(a))
+        return a
+
+
 def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], episodes: int, seed: int, gamma: float,
                   progress: Callable[[int], None] | None = None) -> Demos:
-    """``episodes`` climbs of the planner in ``make_env(**env_kwargs)``, the first reset seeded
+    """``episodes`` climbs of the planner in ``make_env(**env_kwargs)``, played by the project's
+    one episode loop (:func:`kinegym.agents.rollout.run_episode`), the first reset seeded
     ``seed`` (a pool env then draws its tasks from its own seeded generator, as in training).
     Episodes in which the planner finds no route from where the robot is are kept up to there
     (rare: walls are accepted only with a route). ``progress(1)`` after each episode."""
     from kinegym.agents.gait_planner import PlannerAgent
+    from kinegym.agents.rollout import run_episode
 
     if episodes < 1:
         raise ValueError(f"episodes={episodes!r}; expected >= 1")
@@ -63,28 +81,14 @@ def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], epis
     rets: list[float] = []
     climbed = 0
     try:
-        obs, info = env.reset(seed=int(seed))
-        for _ in range(episodes):
-            agent = PlannerAgent()
-            rewards: list[float] = []
-            done = False
-            while not done:
-                a = agent.act(env.unwrapped, obs)
-                if a is None:
-                    break
-                obs_rows.append(np.asarray(obs, dtype=np.float32))
-                masks.append(np.asarray(info["action_mask"], dtype=bool))
-                acts.append(int(a))
-                obs, r, term, trunc, info = env.step(a)
-                rewards.append(float(r))
-                done = term or trunc
-            climbed += bool(done and info.get("is_success", False))
+        for i in range(episodes):
+            ep = run_episode(env, _Recorder(PlannerAgent(), obs_rows, masks, acts), seed=int(seed) if i == 0 else None)
+            climbed += ep.success
             g, back = 0.0, []
-            for r in reversed(rewards):
+            for r in reversed(ep.rewards):
                 g = r + gamma * g
                 back.append(g)
             rets.extend(reversed(back))
-            obs, info = env.reset()
             if progress is not None:
                 progress(1)
     finally:
@@ -95,10 +99,11 @@ def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], epis
 
 
 def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr: float = 1e-3,
-          vf_coef: float = 0.5, seed: int = 0) -> dict[str, float]:
+          vf_coef: float = 0.5, max_grad_norm: float = 0.5, seed: int = 0) -> dict[str, float]:
     """Fit a MaskablePPO ``policy`` to ``demos``: the masked negative log-likelihood of the
     planner's moves plus ``vf_coef`` times the squared error of the value head on the
-    returns, ``epochs`` passes in shuffled batches (a seeded torch generator) with Adam.
+    returns, ``epochs`` passes in shuffled batches (a seeded torch generator) with Adam, the
+    gradient's norm clipped to ``max_grad_norm`` as PPO clips it.
     Returns the last epoch's mean losses and the share of demo moves the policy's greedy
     (masked) choice now matches."""
     import torch as th
@@ -128,7 +133,7 @@ def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr
             loss = nll + vf_coef * vf
             opt.zero_grad()
             loss.backward()
-            th.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
+            th.nn.utils.clip_grad_norm_(policy.parameters(), max_grad_norm)
             opt.step()
             nll_sum += nll.item() * len(idx)
             vf_sum += vf.item() * len(idx)

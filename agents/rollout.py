@@ -28,7 +28,7 @@ class Agent(Protocol):
 @dataclass
 class Episode:
     """What one episode came to: success, moves, falls, return, the agent's thinking time per
-    step (s), the last ``info`` and, when asked for, the rendered frames."""
+    step (s), the last ``info``, when asked for the rendered frames, and each step's reward."""
 
     success: bool
     moves: int
@@ -38,6 +38,7 @@ class Episode:
     info: dict[str, Any]
     seconds: float
     frames: list[np.ndarray] = field(default_factory=list)
+    rewards: list[float] = field(default_factory=list)
 
 
 def run_episode(env: Any, agent: Agent, seed: int | None = None, frames: bool = False,
@@ -47,7 +48,7 @@ def run_episode(env: Any, agent: Agent, seed: int | None = None, frames: bool = 
     tic = time.perf_counter()
     obs, info = env.reset(seed=seed)
     shots = [env.render()] if frames else []
-    done, ret, falls, think = False, 0.0, 0, []
+    done, falls, think, rewards = False, 0, [], []
     while not done:
         t0 = time.perf_counter()
         a = agent.act(env.unwrapped, obs)
@@ -55,12 +56,12 @@ def run_episode(env: Any, agent: Agent, seed: int | None = None, frames: bool = 
         if a is None:
             break
         obs, r, term, trunc, info = env.step(a)
-        ret += float(r)
+        rewards.append(float(r))
         falls += info["outcome"] == "fell"
         done = term or trunc
         if frames:
             shots.append(env.render())
         if on_step is not None:
             on_step()
-    return Episode(bool(info["is_success"]), int(info["moves"]), falls, ret, think, info,
-                   time.perf_counter() - tic, shots)
+    return Episode(bool(info["is_success"]), int(info["moves"]), falls, sum(rewards), think, info,
+                   time.perf_counter() - tic, shots, rewards)

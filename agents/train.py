@@ -300,7 +300,7 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"])
     t1 = time.monotonic()
     stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
-                  vf_coef=cfg["vf_coef"], seed=seed)
+                  vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed)
     out = {"episodes": demos.episodes, "climbed": demos.climbed, "moves": len(demos),
            "demo_seconds": round(t1 - t0, 1), "clone_seconds": round(time.monotonic() - t1, 1),
            **{k: round(float(v), 4) for k, v in stats.items() if k != "moves"}}
