@@ -110,11 +110,16 @@ def _stroke_width(mask: np.ndarray) -> float:
     medians (a run across a stroke is its width; one along it is long)."""
     widths = []
     for m in (mask, mask.T):
-        pad = np.pad(m, ((0, 0), (1, 1))).astype(np.int8)
-        diff = np.diff(pad, axis=1)
-        starts, ends = np.nonzero(diff == 1), np.nonzero(diff == -1)
-        runs = ends[1] - starts[1]
-        runs = runs[runs > 0]
+        # each row with a 0 after it, the rows end to end: a run starts or ends where the
+        # value changes (one flat pass, not two 2-D nonzero calls)
+        h, w = m.shape
+        pad = np.zeros((h, w + 1), np.uint8)
+        pad[:, :w] = m
+        flat = pad.ravel()
+        edges = np.flatnonzero(flat[1:] != flat[:-1]) + 1
+        if flat[0]:
+            edges = np.concatenate([[0], edges])
+        runs = edges[1::2] - edges[0::2]
         if len(runs):
             widths.append(float(np.median(runs)))
     return max(1.0, min(widths)) if widths else 2.0
@@ -130,12 +135,20 @@ def _directions(mask: np.ndarray, width: float) -> tuple[float, float]:
         xs, ys = xs[pick], ys[pick]
     step = 2
     th = np.radians(np.arange(0, 180, step))  # normal angles
-    proj = np.outer(np.cos(th), xs) + np.outer(np.sin(th), ys)  # (A, N)
+    c, s = np.cos(th), np.sin(th)
+    xs, ys = xs.astype(np.float64), ys.astype(np.float64)
     binw = max(2.0, width)
-    b = ((proj - proj.min(axis=1, keepdims=True)) / binw).astype(np.intp)
-    nb = int(b.max()) + 1
-    counts = np.bincount((b + nb * np.arange(len(th))[:, None]).ravel(), minlength=nb * len(th)).reshape(len(th), nb)
-    energy = (counts.astype(np.float64) ** 2).sum(axis=1)
+    energy = np.empty(len(th))
+    for a0 in range(0, len(th), 30):  # 30 angles at a time, in place: a quarter of the time
+        proj = np.outer(c[a0:a0 + 30], xs)  # (30, N)
+        proj += np.outer(s[a0:a0 + 30], ys)
+        proj -= proj.min(axis=1, keepdims=True)
+        proj /= binw
+        b = proj.astype(np.intp)
+        nb = int(b.max()) + 1
+        b += nb * np.arange(len(b))[:, None]
+        counts = np.bincount(b.ravel(), minlength=nb * len(b)).reshape(len(b), nb)
+        energy[a0:a0 + 30] = (counts.astype(np.float64) ** 2).sum(axis=1)
     energy = np.convolve(np.concatenate([energy[-2:], energy, energy[:2]]), [0.25, 0.5, 1.0, 0.5, 0.25], "same")[2:-2]
     i = int(np.argmax(energy))
     m = len(th)
@@ -356,11 +369,22 @@ def _sharing(tracks: list[Track], width: float) -> np.ndarray:
     pts = [_resample(t.pts, 3.0) for t in tracks]
     out = np.zeros((len(tracks), len(tracks)), bool)
     near = 2.0 * width + 2.0
+    lo = np.array([p.min(axis=0) for p in pts]) - near
+    hi = np.array([p.max(axis=0) for p in pts]) + near
     for i, j in itertools.combinations(range(len(tracks)), 2):
+        if np.any(lo[i] > hi[j]) or np.any(lo[j] > hi[i]):
+            continue  # no point of one is near the other's box, let alone the other
         a, b = (pts[i], pts[j]) if len(pts[i]) <= len(pts[j]) else (pts[j], pts[i])
         dist = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
         out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
     return out
+
+
+def _median(v: np.ndarray) -> float:
+    """``np.median`` of a short 1-D array, the same value without its per-call overhead."""
+    v = np.sort(v)
+    n = len(v)
+    return float(v[n // 2]) if n % 2 else float((v[n // 2 - 1] + v[n // 2]) / 2)
 
 
 def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float
@@ -418,10 +442,10 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             # cell size along each line between its crossings
             sa = np.abs(np.diff(pos_a, axis=1))  # (k, k-1) along a-lines
             sb = np.abs(np.diff(pos_b, axis=0))  # (k-1, k) along b-lines
-            cell = float(np.median(np.concatenate([sa.ravel(), sb.ravel()])))
+            allsz = np.concatenate([sa.ravel(), sb.ravel()])
+            cell = _median(allsz)
             if cell < 0.06 * max(h, w):
                 continue
-            allsz = np.concatenate([sa.ravel(), sb.ravel()])
             if allsz.max() > 2.6 * allsz.min():
                 continue
             side = float(max(h, w))
