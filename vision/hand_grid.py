@@ -339,20 +339,27 @@ def _intersect(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] 
     """First crossing of polylines ``a`` and ``b``: the point and its arc positions along each."""
     p, r = a[:-1], a[1:] - a[:-1]
     q, s = b[:-1], b[1:] - b[:-1]
-    rxs = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
-    qp = q[None, :, :] - p[:, None, :]
+    # only segment pairs whose boxes meet can cross (a hair wider than exact: no rounding
+    # could make a pair the boxes rule out cross); the pairs kept stay in row-major order
+    lo_a, hi_a = np.minimum(a[:-1], a[1:]) - 1e-6, np.maximum(a[:-1], a[1:]) + 1e-6
+    lo_b, hi_b = np.minimum(b[:-1], b[1:]), np.maximum(b[:-1], b[1:])
+    ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
+                        & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
+    rr, ss = r[ii], s[jj]
+    rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
+    qp = q[jj] - p[ii]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[..., 0] * s[None, :, 1] - qp[..., 1] * s[None, :, 0]) / rxs
-        u = (qp[..., 0] * r[:, None, 1] - qp[..., 1] * r[:, None, 0]) / rxs
-    ok = (np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
-    hit = np.argwhere(ok)
-    if not len(hit):
+        t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
+        u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
+    ok = np.flatnonzero((np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1))
+    if not len(ok):
         return None
-    i, j = hit[0]
+    k = ok[0]
+    i, j = ii[k], jj[k]
     la = np.concatenate([[0.0], np.cumsum(np.hypot(*r.T))])
     lb = np.concatenate([[0.0], np.cumsum(np.hypot(*s.T))])
-    pt = p[i] + t[i, j] * r[i]
-    return pt, float(la[i] + t[i, j] * np.hypot(*r[i])), float(lb[j] + u[i, j] * np.hypot(*s[j]))
+    pt = p[i] + t[k] * r[i]
+    return pt, float(la[i] + t[k] * np.hypot(*r[i])), float(lb[j] + u[k] * np.hypot(*s[j]))
 
 
 def _resample(p: np.ndarray, step: float) -> np.ndarray:
@@ -611,10 +618,14 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
             cv2.circle(tips, tuple(int(v) for v in np.rint(tip)), int(thick + 2), 1, -1)
     left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
     n_lab, lab = cv2.connectedComponents(left, connectivity=8)
-    for c in np.unique(lab[(tips > 0) & (left > 0)]):
-        if c == 0:
-            continue
-        ys, xs = np.nonzero(lab == c)
+    touching = np.unique(lab[(tips > 0) & (left > 0)])
+    touching = touching[touching > 0]
+    wanted = np.zeros(n_lab, bool)
+    wanted[touching] = True
+    at = np.flatnonzero(wanted[lab.ravel()])  # the touching pieces' px in one pass, row by row
+    of = lab.ravel()[at]
+    for c in touching:
+        ys, xs = np.divmod(at[of == c], d.shape[1])
         if len(xs) < 3:
             out[ys, xs] = 1
             continue
