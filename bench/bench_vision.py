@@ -30,6 +30,7 @@ for each photo's exact camera pose (its best case); in the others for the nomina
 from __future__ import annotations
 
 import argparse
+import math
 import time
 
 import numpy as np
@@ -58,7 +59,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--images", type=int, default=500, help="images per set")
     ap.add_argument("--quick", action="store_true", help="60 images per set")
+    ap.add_argument("--real-only", action="store_true", help="only the 15 real photos' readings and times")
+    ap.add_argument("--repeat", type=int, default=1, help="reads per real photo; its time is the fastest (default 1)")
     args = ap.parse_args()
+    if args.real_only:
+        real_photos(max(1, args.repeat))
+        return
     count = 60 if args.quick else args.images
     print(f"{count} images per set, 640 x 480")
     print("| set | reader | cells right | boards right | X vs O right | refused | ms per frame median / p95 |")
@@ -146,7 +152,7 @@ def real_like(count: int) -> None:
               f"{rule_cells / (9 * len(res)):.1%} / {rule_boards / len(res):.1%} |", flush=True)
 
 
-def real_photos() -> None:
+def real_photos(repeat: int = 1) -> None:
     """The 15 real dev photos (``tests/data/real``, labelled by eye): cells and boards right,
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
     4,000 px phone photo (the reader works at one scale whatever the camera)."""
@@ -170,19 +176,25 @@ def real_photos() -> None:
             img = read_image(data / name)
             if side:
                 img = cv2.resize(img, (side, side * 3 // 4), interpolation=cv2.INTER_CUBIC)
-            t0 = time.perf_counter()
-            try:
-                got = reader.read(img).text()
-            except NoBoardError:
-                got = ""
-                refused += 1
-            times.append(time.perf_counter() - t0)
+            best = math.inf
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                try:
+                    got = reader.read(img).text()
+                except NoBoardError:
+                    got = ""
+                best = min(best, time.perf_counter() - t0)
+            refused += got == ""
+            times.append(best)
             ok = [len(got) == len(want) and (a == b or (b == "*" and a in "XO")) for a, b in zip(got, want) if b != "|"]
             cells += sum(ok)
             boards += bool(ok) and all(ok)
         t = np.asarray(times) * 1e3
         print(f"| {label} | {cells / (9 * len(labels)):.1%} | {boards}/{len(labels)} | {refused} | "
               f"{np.median(t):.1f} / {t.max():.1f} |", flush=True)
+    t0 = time.perf_counter()
+    sum(range(1000))
+    print(f"(anchor: sum(range(1000)) {(time.perf_counter() - t0) * 1e6:.1f} us; fastest of {repeat} reads per photo)")
 
 
 if __name__ == "__main__":

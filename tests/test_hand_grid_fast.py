@@ -1,0 +1,94 @@
+"""The '#' finder's array shortcuts give what the plain definitions give: the stroke width
+(run lengths), the first crossing of two polylines (tried only where segment boxes meet) and
+the Radon directions (in chunks of angles), on random inputs, to the last bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from kinegym.vision import hand_grid
+
+
+def _runs(mask: np.ndarray) -> list[int]:
+    out = []
+    for row in mask:
+        n = 0
+        for v in list(row) + [0]:
+            if v:
+                n += 1
+            elif n:
+                out.append(n)
+                n = 0
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_stroke_width_is_the_median_run(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    mask = (rng.random((37, 53)) < rng.uniform(0.1, 0.7)).astype(np.uint8)
+    mask[0, 0] = seed % 2  # a run that starts at the very first pixel, or not
+    want = [float(np.median(_runs(m))) for m in (mask, mask.T)]
+    assert hand_grid._stroke_width(mask) == max(1.0, min(want))
+
+
+def _first_crossing(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] | None:
+    """Every segment pair, row-major, the first that crosses (the plain definition)."""
+    la = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(a, axis=0).T))])
+    lb = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(b, axis=0).T))])
+    for i in range(len(a) - 1):
+        p, r = a[i], a[i + 1] - a[i]
+        for j in range(len(b) - 1):
+            q, s = b[j], b[j + 1] - b[j]
+            rxs = r[0] * s[1] - r[1] * s[0]
+            if abs(rxs) <= 1e-9:
+                continue
+            qp = q - p
+            t = (qp[0] * s[1] - qp[1] * s[0]) / rxs
+            u = (qp[0] * r[1] - qp[1] * r[0]) / rxs
+            if 0 <= t <= 1 and 0 <= u <= 1:
+                return p + t * r, float(la[i] + t * np.hypot(*r)), float(lb[j] + u * np.hypot(*s))
+    return None
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_first_crossing_matches_every_pair_tried(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    # wavy strokes across a 400 px image, sometimes crossing several times, sometimes not at all
+    n, m = int(rng.integers(2, 40)), int(rng.integers(2, 40))
+    a = np.cumsum(rng.normal([8.0, 1.0], 6.0, (n, 2)), axis=0)
+    b = np.cumsum(rng.normal([1.0, 8.0], 6.0, (m, 2)), axis=0)
+    a += 200 - a[n // 2] + rng.normal(0, 5 if seed % 4 else 60, 2)  # mostly crossing near their middles
+    b += 200 - b[m // 2]
+    if seed % 5 == 0:  # a crossing exactly at a vertex
+        b[m // 2] = a[n // 2]
+    got, want = hand_grid._intersect(a, b), _first_crossing(a, b)
+    assert (got is None) == (want is None)
+    if seed in (1, 2, 3):  # the draws these seeds make do cross: the test compares crossings, not only misses
+        assert want is not None
+    if want is not None:
+        assert np.array_equal(got[0], want[0]) and got[1:] == want[1:]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_directions_equal_the_one_pass_energy(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    mask = np.zeros((240, 320), np.uint8)
+    import cv2
+
+    for _ in range(6):  # a few long strokes of two directions and some noise
+        x, y = rng.uniform(0, 320), rng.uniform(0, 240)
+        ang = rng.choice([0.3, 1.9]) + rng.normal(0, 0.05)
+        cv2.line(mask, (int(x - 200 * np.cos(ang)), int(y - 200 * np.sin(ang))),
+                 (int(x + 200 * np.cos(ang)), int(y + 200 * np.sin(ang))), 1, 2)
+    mask[rng.random(mask.shape) < 0.01] = 1
+    ys, xs = np.nonzero(mask)
+    th = np.radians(np.arange(0, 180, 2))
+    proj = np.outer(np.cos(th), xs) + np.outer(np.sin(th), ys)
+    binw = max(2.0, hand_grid._stroke_width(mask))
+    b = ((proj - proj.min(axis=1, keepdims=True)) / binw).astype(np.intp)
+    energy = np.array([(np.bincount(row).astype(np.float64) ** 2).sum() for row in b])
+    energy = np.convolve(np.concatenate([energy[-2:], energy, energy[:2]]), [0.25, 0.5, 1.0, 0.5, 0.25], "same")[2:-2]
+    i = int(np.argmax(energy))
+    phi_a, _ = hand_grid._directions(mask, hand_grid._stroke_width(mask))
+    assert phi_a == float(np.mod(th[i] + np.pi / 2, np.pi))
