@@ -42,6 +42,7 @@ import cv2
 import numpy as np
 
 from .errors import NoBoardError
+from .grid_lines import _median
 from .ink import angle_deg, colour_at, ink_threshold, unit
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
@@ -385,13 +386,6 @@ def _sharing(tracks: list[Track], width: float) -> np.ndarray:
         dist = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
         out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
     return out
-
-
-def _median(v: np.ndarray) -> float:
-    """``np.median`` of a short 1-D array, the same value without its per-call overhead."""
-    v = np.sort(v)
-    n = len(v)
-    return float(v[n // 2]) if n % 2 else float((v[n // 2 - 1] + v[n // 2]) / 2)
 
 
 def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float
