@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinegym.vision import hand_grid
+from kinegym.vision import hand_grid, polylines
 
 
 def _runs(mask: np.ndarray) -> list[int]:
@@ -62,7 +62,7 @@ def test_first_crossing_matches_every_pair_tried(seed: int) -> None:
     b += 200 - b[m // 2]
     if seed % 5 == 0:  # a crossing exactly at a vertex
         b[m // 2] = a[n // 2]
-    got, want = hand_grid._intersect(a, b), _first_crossing(a, b)
+    got, want = polylines.first_crossing(a, b), _first_crossing(a, b)
     assert (got is None) == (want is None)
     if seed in (1, 2, 3):  # the draws these seeds make do cross: the test compares crossings, not only misses
         assert want is not None

@@ -44,6 +44,7 @@ import numpy as np
 from .errors import NoBoardError
 from .grid_lines import _median
 from .ink import angle_deg, colour_at, ink_threshold, unit
+from .polylines import extend, first_crossing, resample
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
 
@@ -327,54 +328,10 @@ def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.nd
     return np.concatenate(out, axis=0)
 
 
-def _extend(p: np.ndarray, by: float) -> np.ndarray:
-    """A polyline with straight extensions of ``by`` px at both ends."""
-    d0 = p[0] - p[1]
-    d1 = p[-1] - p[-2]
-    d0 = d0 / max(float(np.hypot(*d0)), 1e-9)
-    d1 = d1 / max(float(np.hypot(*d1)), 1e-9)
-    return np.concatenate([[p[0] + by * d0], p, [p[-1] + by * d1]])
-
-
-def _intersect(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] | None:
-    """First crossing of polylines ``a`` and ``b``: the point and its arc positions along each."""
-    p, r = a[:-1], a[1:] - a[:-1]
-    q, s = b[:-1], b[1:] - b[:-1]
-    # only segment pairs whose boxes meet can cross (a hair wider than exact: no rounding
-    # could make a pair the boxes rule out cross); the pairs kept stay in row-major order
-    lo_a, hi_a = np.minimum(a[:-1], a[1:]) - 1e-6, np.maximum(a[:-1], a[1:]) + 1e-6
-    lo_b, hi_b = np.minimum(b[:-1], b[1:]), np.maximum(b[:-1], b[1:])
-    ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
-                        & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
-    rr, ss = r[ii], s[jj]
-    rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
-    qp = q[jj] - p[ii]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
-        u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
-    ok = np.flatnonzero((np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1))
-    if not len(ok):
-        return None
-    k = ok[0]
-    i, j = ii[k], jj[k]
-    la = np.concatenate([[0.0], np.cumsum(np.hypot(*r.T))])
-    lb = np.concatenate([[0.0], np.cumsum(np.hypot(*s.T))])
-    pt = p[i] + t[k] * r[i]
-    return pt, float(la[i] + t[k] * np.hypot(*r[i])), float(lb[j] + u[k] * np.hypot(*s[j]))
-
-
-def _resample(p: np.ndarray, step: float) -> np.ndarray:
-    """Points every ``step`` px along a polyline."""
-    seg = np.hypot(*np.diff(p, axis=0).T)
-    arc = np.concatenate([[0.0], np.cumsum(seg)])
-    t = np.arange(0.0, arc[-1] + 1e-9, step)
-    return np.stack([np.interp(t, arc, p[:, 0]), np.interp(t, arc, p[:, 1])], axis=1)
-
-
 def _sharing(tracks: list[Track], width: float) -> np.ndarray:
     """``(T, T)`` bool: pairs of tracks that run along the same stroke for a quarter of the
     shorter one (a track that strays off a line into a mark shares the line's start)."""
-    pts = [_resample(t.pts, 3.0) for t in tracks]
+    pts = [resample(t.pts, 3.0) for t in tracks]
     out = np.zeros((len(tracks), len(tracks)), bool)
     near = 2.0 * width + 2.0
     lo = np.array([p.min(axis=0) for p in pts]) - near
@@ -393,15 +350,15 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
     """The best choice of ``k`` tracks per family forming a '#': (score, chosen a, chosen b,
     crossings ``(k, k, 2)``)."""
     h, w = shape
-    ea = [_extend(t.pts, ext) for t in fa]
-    eb = [_extend(t.pts, ext) for t in fb]
+    ea = [extend(t.pts, ext) for t in fa]
+    eb = [extend(t.pts, ext) for t in fb]
     la = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in ea]
     lb = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in eb]
     cross: dict[tuple[int, int], tuple[np.ndarray, float, float] | None] = {}
 
     def X(i: int, j: int) -> tuple[np.ndarray, float, float] | None:
         if (i, j) not in cross:
-            cross[(i, j)] = _intersect(ea[i], eb[j])
+            cross[(i, j)] = first_crossing(ea[i], eb[j])
         return cross[(i, j)]
 
     def at_edge(p: np.ndarray) -> bool:
@@ -555,8 +512,8 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     # each chosen line traced densely along its ink, and the crossings taken from those
     for tr in cols + rows:
         tr.dense = _dense(tr, width)
-    pts = np.array([[c[0] if (c := _intersect(_extend(a.dense, ext), _extend(b.dense, ext))) is not None else pts[i, j]
-                     for j, b in enumerate(rows)] for i, a in enumerate(cols)])
+    pts = np.array([[c[0] if (c := first_crossing(extend(a.dense, ext), extend(b.dense, ext))) is not None
+                      else pts[i, j] for j, b in enumerate(rows)] for i, a in enumerate(cols)])
     k = n - 1
     lat = np.array([[i + 1, j + 1] for i in range(k) for j in range(k)], np.float64)
     img = pts.reshape(-1, 2).astype(np.float64)
@@ -606,7 +563,7 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
     tips = np.zeros(d.shape, np.uint8)
     for tr in grid.cols + grid.rows:
-        p = np.rint(_extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
+        p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
         cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
         for tip in (tr.dense[0], tr.dense[-1]):
             cv2.circle(tips, tuple(int(v) for v in np.rint(tip)), int(thick + 2), 1, -1)
