@@ -94,12 +94,13 @@ def on_graph_paper(img: np.ndarray, strength: float) -> np.ndarray:
 def test_real_photos_on_graph_paper() -> None:
     """The real photos with graph-paper rules laid over them, read as the game reads (3 x 3).
     Rules at 15 % strength: 11 of 15 (9 before the '#' was sought in the ink darker than
-    the rules); at 25 %, as dark as the faintest '#' lines here: 4 (0 before). Measured, not
-    met: graph paper is the reader's weakest surface."""
+    the rules); at 25 %, as dark as the faintest '#' lines here: 6 (0 before that, 4 before
+    heavier rules were told from the pen). Measured, not met: graph paper is the reader's
+    weakest surface."""
     def right(strength: float) -> int:
         return sum(matches(BoardReader(size=3).read(on_graph_paper(read_image(DATA / name), strength)).text(), label)
                    for name, label in LABELS.items())
-    assert right(0.15) >= 11 and right(0.25) >= 3
+    assert right(0.15) >= 11 and right(0.25) >= 5
 
 
 def test_a_ruling_with_no_straight_runs_reads_without_numeric_warnings() -> None:

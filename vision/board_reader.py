@@ -79,6 +79,7 @@ from .grid_lines import (
 from .hand_grid import GRID_SIDE_PX, erase_mask, find_hash_grid
 from .ink import _apply, _as_rgb, ink_colour, ink_map
 from .reading import EMPTY, BoardReading, O, X
+from .ruling import clear_rules
 from .threshold_reader import ThresholdReader
 
 __all__ = [
@@ -205,10 +206,7 @@ class BoardReader:
         clean = d.copy()
         clean[erase > 0] = 0.0
         if grid.rules is not None:  # ruled paper: what is no darker than its rules, on a rule, is a rule
-            on = cv2.dilate(cv2.resize(grid.rules, (w, h), interpolation=cv2.INTER_NEAREST), np.ones((3, 3))) > 0
-            on &= erase == 0
-            level = float(np.median(d[on])) if on.any() else 1.0
-            clean[on & (d < 2.0 * level)] = 0.0
+            clear_rules(clean, d, rgb, grid.rules, grid.rule_hue, erase > 0)
         # the contrast of real ink: the lines' darkness along their traces
         pts = np.concatenate([tr.dense for tr in grid.cols + grid.rows]) @ to_d[:2, :2].T + to_d[:2, 2]
         line_ref = max(float(np.median(_darkest_near(d, np.rint(pts).astype(np.intp)))), 1e-3)

@@ -17,10 +17,12 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
    across it; in each band a stroke of that family is a peak of the ink summed along the
    band (strokes of the other family spread flat). Peaks are linked from band to band,
    allowing drift (perspective, waves) and gaps (faint or broken pen): a track is a
-   polyline that may bend. A family of eight or more evenly spaced long tracks is ruled or
-   graph paper: the '#' is first sought in the ink darker than 1.6x the rules' (where its lines
-   stand alone), else only tracks with 1.5x the rules' ink or another colour stay candidates;
-   the rules' ink (:attr:`HashGrid.rules`) is cleared from the cells unless twice as dark.
+   polyline that may bend. A family of sixteen long tracks, or eight evenly spaced, is ruled
+   or graph paper (:mod:`~kinegym.vision.ruling`): the '#' is first sought in the ink darker
+   than 1.6x the rules' (where its lines stand alone), less the rules' colour, then with it,
+   dropping tracks that run on as dark at both ends (heavier rules); else only tracks with
+   1.5x the rules' ink or another colour stay candidates. The rules' ink
+   (:attr:`HashGrid.rules`) is cleared from the cells (:func:`~kinegym.vision.ruling.clear_rules`).
 4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
    pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
    in size, and each line should run on past its outer crossings (the outer cells). The
@@ -34,6 +36,7 @@ chosen tracks, which the reader erases from the ink before reading the cells.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
@@ -43,8 +46,9 @@ import numpy as np
 
 from .errors import NoBoardError
 from .grid_lines import _median
-from .ink import angle_deg, colour_at, ink_threshold, unit
+from .ink import colour_at, ink_threshold, unit
 from .polylines import extend, first_crossing, resample
+from .ruling import HUE_DEG, Ruling, is_ruled, without_rules
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
 
@@ -90,6 +94,7 @@ class HashGrid:
     score: float
     error_px: float
     rules: np.ndarray | None = None  # uint8 mask of ruled paper's lines, if the paper is ruled
+    rule_hue: np.ndarray | None = None  # their unit RGB darkness, if the colour is known
 
 
 def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0) -> tuple[np.ndarray, float, float]:
@@ -250,50 +255,6 @@ def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
     return out, M, rot
 
 
-def _is_ruled(tracks: list[Track], side: float) -> bool:
-    """Ruled or graph paper in this family: eight or more long lines of one direction, most
-    of them evenly spaced (a '#' has two lines a way, a frame two more, a second grid or a
-    page edge a few)."""
-    long = [t for t in tracks if t.span >= 0.25 * side]
-    if len(long) < 8:
-        return False
-    u = np.array([t.pts[-1] - t.pts[0] for t in long])
-    u = u * np.where(u[:, 1:2] < 0, -1.0, 1.0)  # one sense along the family
-    u = np.median(u / np.hypot(u[:, :1], u[:, 1:]), axis=0)
-    gaps = np.diff(np.sort([float(np.mean(t.pts, axis=0) @ [-u[1], u[0]]) for t in long]))
-    return bool(np.mean(np.abs(gaps - np.median(gaps)) <= 0.3 * np.median(gaps)) >= 0.5)
-
-
-def _without_rules(tracks: list[Track], side: float) -> list[Track]:
-    """A ruled family's tracks (:func:`_is_ruled`) less the printed rules: tracks with 1.5x the
-    long ones' median ink, or more than :data:`_HUE_DEG` off their colour (another pen), stay;
-    with fewer than two long tracks left the family is kept as it is."""
-    long = [t for t in tracks if t.span >= 0.25 * side]
-    ink = float(np.median([t.ink for t in long]))
-    hue = unit(np.median([t.colour for t in long], axis=0)) if long[0].colour is not None else None
-    keep = [t for t in tracks if t.ink >= 1.5 * ink or (hue is not None and angle_deg(t.colour, hue) > _HUE_DEG)]
-    return keep if sum(t.span >= 0.25 * side for t in keep) >= 2 else tracks
-
-
-#: Pens of one '#' differ by less than this in ink colour (deg between RGB darkness vectors);
-#: rules this far off the drawn lines' colour are another pen's.
-_HUE_DEG = 12.0
-
-
-def _rules(mask: np.ndarray, phis: list[float], length: int) -> np.ndarray:
-    """uint8 mask of the ink that lies on straight runs ``length`` px long along any of the
-    directions ``phis`` (or up to 8 deg off them: perspective makes rules converge): ruled
-    paper's lines (openings with a line)."""
-    out = np.zeros_like(mask)
-    r = length // 2
-    for phi in (p + math.radians(t) for p in phis for t in (-8, -4, 0, 4, 8)):  # perspective turns them
-        k = np.zeros((2 * r + 1, 2 * r + 1), np.uint8)
-        dx, dy = r * math.cos(phi), r * math.sin(phi)
-        cv2.line(k, (int(round(r - dx)), int(round(r - dy))), (int(round(r + dx)), int(round(r + dy))), 1, 1)
-        out |= cv2.morphologyEx(mask, cv2.MORPH_OPEN, k)
-    return out
-
-
 def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.ndarray:
     """A track ``q`` (turned px, rows increasing) lengthened at both ends along the ink: the
     band peaks stop up to a band short of a stroke's end (a part-filled band is below the
@@ -429,7 +390,7 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             if hue is not None:  # one pen draws a '#': lines of another colour are something else
                 u = hue[list(ca) + [len(fa) + j for j in cb]]
                 spread = math.degrees(math.acos(float(np.clip((u @ unit(u.sum(axis=0))).min(), -1.0, 1.0))))
-                score -= 0.02 * max(0.0, spread - _HUE_DEG)
+                score -= 0.02 * max(0.0, spread - HUE_DEG)
             if best is None or score > best[0]:
                 best = (score, tuple(ca[v] for v in oa), tuple(cb[v] for v in ob), pts)
     return best
@@ -452,8 +413,10 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
 
 
 def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
-                    above: float = 0.0) -> HashGrid:
+                    above: float = 0.0, ruling: Ruling | None = None) -> HashGrid:
     mask, t, width = ink_mask(d, share, above)
+    if ruling is not None and ruling.by_colour and colour is not None:
+        mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
     phi_a, phi_b = _directions(mask, width)
@@ -468,17 +431,25 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
         for tr in fa + fb:
             tr.colour = colour_at(d, colour, tr.pts)
     side = float(max(d.shape))
-    ruled_a, ruled_b = _is_ruled(fa, side), _is_ruled(fb, side)
+    ruled_a, ruled_b = is_ruled(fa, side), is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     # evenly spaced tracks with no long straight run of ink among them are no ruling to clear
-    rules = r if ruled and (r := _rules(mask, ruled, max(9, int(0.06 * side)))).any() else None
-    if rules is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
-        with contextlib.suppress(NoBoardError):
-            grid = _find_hash_grid(d, sizes, share, colour, 1.6 * float(np.median(d[rules > 0])))
-            grid.rules = rules if grid.rules is None else grid.rules | rules
-            return grid
-    fa = _without_rules(fa, side) if ruled_a else fa
-    fb = _without_rules(fb, side) if ruled_b else fb
+    own = Ruling.of(mask, ruled, d, colour) if ruled else None
+    rules = own.rules if own is not None else None
+    if own is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
+        darker = 1.6 * float(np.median(d[own.rules > 0]))
+        # first with the rules' colour left out (a pen of another colour), then all of that ink
+        for inner in ((dataclasses.replace(own, by_colour=True), own) if own.hue is not None else (own,)):
+            with contextlib.suppress(NoBoardError):
+                grid = _find_hash_grid(d, sizes, share, colour, darker, inner)
+                grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
+                grid.rule_hue = own.hue
+                return grid
+    fa = without_rules(fa, side) if ruled_a else fa
+    fb = without_rules(fb, side) if ruled_b else fb
+    if ruling is not None:  # heavier rules (every fifth, say) are as dark as a pen: they run on along a rule
+        fa = [tr for tr in fa if not ruling.runs_on(tr, phi_a)]
+        fb = [tr for tr in fb if not ruling.runs_on(tr, phi_b)]
     # the longest few of each family (symbol strokes make short tracks)
     fa = sorted(fa, key=lambda tr: -tr.span * tr.strength)[:7]
     fb = sorted(fb, key=lambda tr: -tr.span * tr.strength)[:7]
