@@ -13,6 +13,15 @@ masks and rewards), then fits the MaskablePPO policy to those climbs before PPO 
   so PPO's first advantages are not measured against an untrained critic, which would
   undo the cloned moves in the first updates.
 
+With ``dagger_rounds: R`` the clone is then corrected where it goes astray (DAgger, Ross,
+Gordon and Bagnell 2011): each round the cloned policy climbs ``dagger_episodes`` training
+tasks itself (deterministic moves, as it is evaluated), the planner labels every state the
+policy visited with its own move from there (:func:`policy_labels`: it replans from the stance
+the robot believes it holds), those rows join the clone set and the policy is fitted to it all
+again. A cloned policy fails by cycling in states the planner's climbs never showed; labelled
+there, it leaves them. The value head is fitted on the planner's climbs only (a labelled
+state has no return of the planner's to learn).
+
 PPO then learns from there as usual; the planner is never consulted again (not in
 training's later phase, not at evaluation: the policy acts from its observations alone).
 The planner is weighted A*, so its climbs are good, not optimal: the policy can improve on
@@ -42,6 +51,12 @@ class Demos:
 
     def __len__(self) -> int:
         return len(self.actions)
+
+    def joined(self, other: Demos) -> Demos:
+        """These rows and ``other``'s (episodes and climbs added up)."""
+        return Demos(np.concatenate([self.obs, other.obs]), np.concatenate([self.actions, other.actions]),
+                     np.concatenate([self.masks, other.masks]), np.concatenate([self.returns, other.returns]),
+                     self.episodes + other.episodes, self.climbed + other.climbed)
 
 
 class _Recorder:
@@ -98,12 +113,68 @@ def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], epis
                  np.asarray(masks, bool).reshape(len(acts), -1), np.asarray(rets, np.float32), episodes, climbed)
 
 
+class _Labeller:
+    """An agent that lets ``act(obs, mask)`` choose the move and keeps, for every state it
+    meets, the observation, the env's mask and the planner's move from there (none where the
+    planner finds no route)."""
+
+    def __init__(self, act: Callable[[np.ndarray, np.ndarray], int], rows: tuple[list, list, list],
+                 stats: dict[str, int]) -> None:
+        from kinegym.agents.gait_planner import PlannerAgent
+
+        self.choose, self.rows, self.stats, self.expert = act, rows, stats, PlannerAgent()
+
+    def act(self, env: Any, obs: Any = None) -> int:
+        mask = np.asarray(env.action_masks(), dtype=bool)
+        label = self.expert.act(env, obs)
+        a = int(self.choose(np.asarray(obs, dtype=np.float32), mask))
+        self.stats["states"] += 1
+        if label is None:
+            self.stats["no_route"] += 1
+        else:
+            self.rows[0].append(np.asarray(obs, dtype=np.float32))
+            self.rows[1].append(mask)
+            self.rows[2].append(int(label))
+            self.stats["differed"] += int(label != a)
+        return a
+
+
+def policy_labels(make_env: Callable[..., Any], env_kwargs: dict[str, Any],
+                  act: Callable[[np.ndarray, np.ndarray], int], episodes: int, seed: int,
+                  progress: Callable[[int], None] | None = None) -> tuple[Demos, dict[str, int]]:
+    """One DAgger round's data: ``act(obs, mask) -> move`` climbs ``episodes`` tasks of
+    ``make_env(**env_kwargs)`` (the first reset seeded ``seed``), played by the project's one
+    episode loop; every state it visits is labelled with the planner's move from there. The
+    rows' returns are NaN (no return of the planner's from there). Also: states visited, states
+    without a route, states where the planner chose otherwise, and the climbs that succeeded."""
+    from kinegym.agents.rollout import run_episode
+
+    if episodes < 1:
+        raise ValueError(f"episodes={episodes!r}; expected >= 1")
+    rows: tuple[list, list, list] = ([], [], [])
+    stats = {"states": 0, "no_route": 0, "differed": 0, "climbed": 0}
+    env = make_env(**env_kwargs)
+    try:
+        for i in range(episodes):
+            ep = run_episode(env, _Labeller(act, rows, stats), seed=int(seed) if i == 0 else None)
+            stats["climbed"] += ep.success
+            if progress is not None:
+                progress(1)
+    finally:
+        env.close()
+    n, n_obs = len(rows[2]), int(np.prod(env.observation_space.shape))
+    return Demos(np.asarray(rows[0], np.float32).reshape(n, n_obs), np.asarray(rows[2], np.int64),
+                 np.asarray(rows[1], bool).reshape(n, -1), np.full(n, np.nan, np.float32), episodes,
+                 stats["climbed"]), stats
+
+
 def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr: float = 1e-3,
           vf_coef: float = 0.5, max_grad_norm: float = 0.5, seed: int = 0) -> dict[str, float]:
     """Fit a MaskablePPO ``policy`` to ``demos``: the masked negative log-likelihood of the
     planner's moves plus ``vf_coef`` times the squared error of the value head on the
     returns, ``epochs`` passes in shuffled batches (a seeded torch generator) with Adam, the
     gradient's norm clipped to ``max_grad_norm`` as PPO clips it.
+    Rows whose return is NaN (:func:`policy_labels`) count for the action head only.
     Returns the last epoch's mean losses and the share of demo moves the policy's greedy
     (masked) choice now matches."""
     import torch as th
@@ -115,7 +186,9 @@ def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr
     dev = policy.device
     obs = th.as_tensor(demos.obs, device=dev)
     act = th.as_tensor(demos.actions, device=dev)
-    ret = th.as_tensor(demos.returns, device=dev)
+    has_ret = th.as_tensor(~np.isnan(demos.returns), device=dev)
+    partial = not bool(has_ret.all())
+    ret = th.as_tensor(np.nan_to_num(demos.returns), device=dev)
     masks = demos.masks
     opt = th.optim.Adam(policy.parameters(), lr=lr)
     gen = th.Generator().manual_seed(int(seed))
@@ -129,7 +202,11 @@ def clone(policy: Any, demos: Demos, epochs: int = 10, batch_size: int = 256, lr
             idx = order[i:i + batch_size]
             values, log_prob, _ = policy.evaluate_actions(obs[idx], act[idx], action_masks=masks[idx.numpy()])
             nll = -log_prob.mean()
-            vf = th.nn.functional.mse_loss(values.flatten(), ret[idx])
+            if partial:  # the squared error over the rows with a return only
+                w = has_ret[idx].float()
+                vf = (w * (values.flatten() - ret[idx]) ** 2).sum() / w.sum().clamp(min=1.0)
+            else:
+                vf = th.nn.functional.mse_loss(values.flatten(), ret[idx])
             loss = nll + vf_coef * vf
             opt.zero_grad()
             loss.backward()

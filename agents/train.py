@@ -23,7 +23,9 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   physics fine-tuning phase (the envs simulate every move in pymunk from then on).
 * **Warm start** (``bc_episodes: N`` in the config, default 0): before PPO the planner climbs
   ``N`` training tasks and the policy and its critic are fitted to those climbs
-  (:mod:`kinegym.agents.pretrain`; in kinematic mode, also for a physics run); the time counts
+  (:mod:`kinegym.agents.pretrain`; in kinematic mode, also for a physics run); with
+  ``dagger_rounds: R`` the policy then climbs ``dagger_episodes`` tasks per round, the
+  planner labels the states it reached, and it is fitted again (DAgger). The time counts
   against ``--minutes``.
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
@@ -276,6 +278,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
                                   device="cpu", **_model_kwargs(cfg))
         if cfg["bc_episodes"]:
             _warm_start(model, cfg, seed, make_env, run)
+            model.save(run / "warm_start_model.zip")  # the cloned (and DAgger-fitted) policy, before PPO
         cbs = (_callbacks(cfg, run, cfg["n_envs"], make_env, [trial_callback] if trial_callback else []) + limit
                + _step_hook(progress))
         model.learn(total_timesteps=cfg["n_timesteps"], callback=cbs, tb_log_name="run")
@@ -291,7 +294,7 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
 def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, run: Path) -> dict[str, Any]:
     """Clone ``cfg["bc_episodes"]`` planner climbs on the training tasks into ``model``'s policy
     (:mod:`kinegym.agents.pretrain`); what it measured goes to ``run/pretrain.yaml``."""
-    from kinegym.agents.pretrain import clone, planner_demos
+    from kinegym.agents.pretrain import clone, planner_demos, policy_labels
 
     t0 = time.monotonic()
     # the training envs' tasks, climbed in kinematic mode even for a physics run (the same
@@ -301,9 +304,24 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     t1 = time.monotonic()
     stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
                   vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed)
-    out = {"episodes": demos.episodes, "climbed": demos.climbed, "moves": len(demos),
-           "demo_seconds": round(t1 - t0, 1), "clone_seconds": round(time.monotonic() - t1, 1),
-           **{k: round(float(v), 4) for k, v in stats.items() if k != "moves"}}
+    out: dict[str, Any] = {"episodes": demos.episodes, "climbed": demos.climbed, "moves": len(demos),
+                           "demo_seconds": round(t1 - t0, 1), "clone_seconds": round(time.monotonic() - t1, 1),
+                           **{k: round(float(v), 4) for k, v in stats.items() if k != "moves"}}
+
+    def act(obs: np.ndarray, mask: np.ndarray) -> int:  # the policy as it is evaluated: greedy, masked
+        return int(model.predict(obs, action_masks=mask, deterministic=True)[0])
+
+    rounds = []
+    for r in range(cfg["dagger_rounds"]):  # DAgger: the planner labels the states the policy reaches
+        t2 = time.monotonic()
+        labelled, seen = policy_labels(make, env_kwargs, act, cfg["dagger_episodes"], seed=seed + _DAGGER_SEED + r)
+        demos = demos.joined(labelled)
+        fit = clone(model.policy, demos, epochs=cfg["dagger_epochs"], batch_size=cfg["batch_size"],
+                    vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed + 1 + r)
+        rounds.append({**seen, "rows": len(demos), "agreement": round(fit["agreement"], 4),
+                       "seconds": round(time.monotonic() - t2, 1)})
+    if rounds:
+        out["dagger"] = rounds
     _configs.write_atomic(run / "pretrain.yaml", yaml.safe_dump(out, sort_keys=False))
     return out
 
@@ -312,8 +330,13 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
 BC_SECONDS_PER_EPISODE = 0.14
 
 #: the planner's demonstration climbs reset their env from ``seed + _BC_SEED_OFFSET`` (the
-#: training envs use ``seed`` and ``seed + 1``: another draw of the same pool's tasks)
+#: training envs use ``seed`` and ``seed + 1``: another draw of the same pool's tasks), DAgger's
+#: round ``r`` from ``seed + _DAGGER_SEED + r``
 _BC_SEED_OFFSET = 7919
+_DAGGER_SEED = 2 * 7919
+
+#: about what one DAgger climb costs (the policy climbing, the planner labelling every state)
+DAGGER_SECONDS_PER_EPISODE = 0.25
 
 
 def _saved_steps(model_zip: Path) -> int:

@@ -151,6 +151,10 @@ TRAIN_SCHEMA: dict[str, _configs.Spec] = {
     "bc_episodes": _N(lo=0, hi=100_000, integer=True, default=0,
                       doc="planner climbs cloned into the policy before PPO starts (0: none; agents.pretrain)"),
     "bc_epochs": _N(lo=1, hi=1000, integer=True, default=10, doc="passes over the planner's climbs when cloning them"),
+    "dagger_rounds": _N(lo=0, hi=100, integer=True, default=0,
+                        doc="after cloning: rounds of the policy climbing, the planner labelling (agents.pretrain)"),
+    "dagger_episodes": _N(lo=1, hi=100_000, integer=True, default=300, doc="policy climbs labelled per round"),
+    "dagger_epochs": _N(lo=1, hi=1000, integer=True, default=10, doc="passes over all rows after each round"),
 }
 
 

@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from kinegym.agents import train as T
-from kinegym.agents.pretrain import Demos, clone, planner_demos
+from kinegym.agents.pretrain import Demos, clone, planner_demos, policy_labels
 
 KW = {"mode": "kinematic", "memory": True, "hints": True, "wall_pool": 6, "wall_pool_seed": 0}
 
@@ -55,6 +55,7 @@ def test_train_gait_with_a_warm_start_announces_and_records_it(tmp_path: Path) -
     section.update({"n_envs": 1, "n_timesteps": 128, "n_steps": 64, "batch_size": 64, "n_epochs": 1,
                     "eval_freq": 10**6, "eval_episodes": 1, "checkpoint_freq": 10**6,
                     "policy_kwargs": {"net_arch": [32, 32]}, "bc_episodes": 3, "bc_epochs": 2,
+                    "dagger_rounds": 2, "dagger_episodes": 2, "dagger_epochs": 1,
                     "env_kwargs": {"mode": "kinematic", "wall_pool": 4}})
     cfg = tmp_path / "bc.yaml"
     cfg.write_text(yaml.safe_dump(base))
@@ -66,7 +67,12 @@ def test_train_gait_with_a_warm_start_announces_and_records_it(tmp_path: Path) -
     got = yaml.safe_load((run / "pretrain.yaml").read_text())
     assert got["episodes"] == 3 and got["climbed"] == 3 and got["moves"] >= 9
     assert 0.0 <= got["agreement"] <= 1.0 and (run / "final_model.zip").is_file()
+    assert (run / "warm_start_model.zip").is_file()  # the policy before PPO, to evaluate on its own
     assert f"warm start: 3 planner climbs, {got['moves']} moves cloned in" in done.stdout
+    assert "then DAgger (2 x 2 climbs)" in done.stderr
+    first, second = got["dagger"]
+    assert second["rows"] - first["rows"] == second["states"] - second["no_route"] > 0  # each round adds its rows
+    assert f"DAgger round 2: the policy climbed {second['climbed']} of its tasks" in done.stdout
 
 
 def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(monkeypatch: pytest.MonkeyPatch,
@@ -79,7 +85,16 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
         seen.update(env_kwargs)
         return demos
 
+    def fake_labels(make, env_kwargs, act, episodes, seed):  # noqa: ANN001, ANN202
+        seen_labels.update(env_kwargs)
+        picked = act(demos.obs[0], demos.masks[0])
+        assert demos.masks[0][picked]  # the policy's move is one the env offered
+        return Demos(demos.obs[:3], demos.actions[:3], demos.masks[:3], np.full(3, np.nan, np.float32), 1, 0), {
+            "states": 3, "no_route": 0, "differed": 1, "climbed": 0}
+
+    seen_labels: dict = {}
     monkeypatch.setattr(P, "planner_demos", fake_demos)
+    monkeypatch.setattr(P, "policy_labels", fake_labels)
     from sb3_contrib import MaskablePPO
 
     cfg = T.load_train_config()
@@ -89,3 +104,35 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
     # the training envs' pool (and observation: memory and hints), climbed kinematically
     assert seen == {**cfg["env_kwargs"], "mode": "kinematic", "wall_pool": 2000, "wall_pool_seed": 4}
     assert got["moves"] == len(demos) and (tmp_path / "pretrain.yaml").is_file()
+    assert seen_labels == seen  # DAgger's climbs too: the same pool, kinematic
+    assert [r["rows"] for r in got["dagger"]] == [len(demos) + 3 * (r + 1) for r in range(cfg["dagger_rounds"])]
+
+
+def test_dagger_labels_the_policy_s_own_states_with_the_planner_s_moves(demos: Demos) -> None:
+    """A policy that always takes the first offered move wanders; every state it reaches is
+    labelled with the move the planner would make from there, and the returns are left out."""
+    from kinegym.agents.gait_planner import PlannerAgent
+
+    first = lambda obs, mask: int(np.flatnonzero(mask)[0])  # noqa: E731
+    got, stats = policy_labels(T.make_env, KW, first, episodes=2, seed=11)
+    n = len(got)
+    assert n == stats["states"] - stats["no_route"] > 0 and np.isnan(got.returns).all()
+    assert got.masks[np.arange(n), got.actions].all() and got.episodes == 2
+    assert 0 < stats["differed"] <= n  # the first offered move is not always the planner's
+    env = T.make_env(**KW)
+    obs, _ = env.reset(seed=11)
+    assert np.array_equal(got.obs[0], obs) and got.actions[0] == PlannerAgent().act(env.unwrapped, obs)
+    with pytest.raises(ValueError, match="episodes=0"):
+        policy_labels(T.make_env, KW, first, episodes=0, seed=0)
+
+
+def test_cloning_rows_without_a_return_fits_the_critic_on_the_others(demos: Demos) -> None:
+    from sb3_contrib import MaskablePPO
+
+    unlabelled = Demos(demos.obs, demos.actions, demos.masks, np.full(len(demos), np.nan, np.float32), 1, 0)
+    model = MaskablePPO("MlpPolicy", T.make_env(**KW), seed=0, device="cpu", policy_kwargs={"net_arch": [64, 64]})
+    both = demos.joined(unlabelled)
+    assert len(both) == 2 * len(demos) and both.episodes == demos.episodes + 1
+    fit = clone(model.policy, both, epochs=60, batch_size=64, seed=0)
+    assert np.isfinite(fit["value_mse"]) and fit["value_mse"] < 8.0  # half the rows' error, NaN rows left out
+    assert fit["agreement"] >= 0.9

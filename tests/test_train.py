@@ -17,7 +17,8 @@ from kinegym.configs import ConfigError
 
 SMALL = {"n_envs": 2, "n_timesteps": 1024, "n_steps": 64, "batch_size": 64, "n_epochs": 2,
          "eval_freq": 256, "eval_episodes": 2, "checkpoint_freq": 256, "policy_kwargs": {"net_arch": [32, 32]},
-         "bc_episodes": 2, "bc_epochs": 1}  # the default's warm start, cut down
+         "bc_episodes": 2, "bc_epochs": 1, "dagger_rounds": 1, "dagger_episodes": 2,
+         "dagger_epochs": 1}  # the default's warm start and DAgger, cut down
 
 
 def small_config(tmp_path: Path, **changes: object) -> Path:

@@ -73,6 +73,11 @@ def cmd_train(args: argparse.Namespace) -> int:
                 bc_s = T.BC_SECONDS_PER_EPISODE * cfg["bc_episodes"]
                 _say(args, f"warm start: the planner climbs {cfg['bc_episodes']:,} training tasks first and the policy "
                            f"is fitted to its moves (about {_minutes(bc_s)}, inside --minutes)")
+                if cfg["dagger_rounds"]:
+                    dg_s = T.DAGGER_SECONDS_PER_EPISODE * cfg["dagger_episodes"] * cfg["dagger_rounds"]
+                    _say(args, f"then DAgger ({cfg['dagger_rounds']} x {cfg['dagger_episodes']:,} climbs): the policy "
+                               f"climbs training tasks, the planner labels the states it reaches and the policy is "
+                               f"fitted again (about {_minutes(dg_s)})")
         with Progress(steps, "train", enabled=show) as bar:
             run = T.train(args.config, args.timesteps, args.seed, args.n_envs, args.out, progress=bar.update,
                           command=["kinegym", *sys.argv[1:]], minutes=args.minutes, verbose=verbose,
@@ -85,6 +90,10 @@ def cmd_train(args: argparse.Namespace) -> int:
         lines.append(f"warm start: {got['climbed']:,} planner climbs, {got['moves']:,} moves cloned in "
                      f"{got['demo_seconds'] + got['clone_seconds']:.0f} s; the policy then chose the planner's move "
                      f"on {got['agreement']:.0%} of them")
+        for r, rd in enumerate(got.get("dagger", []), 1):
+            lines.append(f"DAgger round {r}: the policy climbed {rd['climbed']:,} of its tasks; the planner chose "
+                         f"otherwise in {rd['differed']:,} of {rd['states']:,} states; {rd['rows']:,} rows, "
+                         f"{rd['agreement']:.0%} agreement, {rd['seconds']:.0f} s")
     curve = run / "learning_curve.png"
     if curve.is_file():
         lines.append(f"learning curve: {curve}")
