@@ -10,7 +10,7 @@ from kinegym.agents.train_cells import grid_is_right
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader
 from kinegym.vision.hand_grid import Track
-from kinegym.vision.ruling import Ruling, clear_rules, is_ruled
+from kinegym.vision.ruling import Ruling, clear_rules, is_ruled, rules_mask
 
 BLUE = np.array([0.75, 0.45, 0.1], np.float32)  # RGB darkness of blue ink: mostly red and green
 RED = np.array([0.1, 0.7, 0.7], np.float32)
@@ -29,6 +29,11 @@ def graph_paper(size: int = 240, step: int = 10, heavy: int = 40) -> tuple[np.nd
     return d, d[:, :, None] * BLUE[None, None, :] / np.linalg.norm(BLUE)
 
 
+def ruling(d: np.ndarray, phis: list[float], colour: np.ndarray | None = None) -> Ruling:
+    """The ruling the '#' finder makes of darkness map ``d``'s ink along ``phis``."""
+    return Ruling.of(rules_mask((d > 0.2).astype(np.uint8), phis, max(9, int(0.06 * max(d.shape)))), phis, d, colour)
+
+
 def vertical(x: float, y0: float, y1: float) -> Track:
     return Track(np.array([[x, y] for y in np.linspace(y0, y1, 8)]), 1.0, 8)
 
@@ -36,26 +41,26 @@ def vertical(x: float, y0: float, y1: float) -> Track:
 def test_a_heavier_rule_runs_on_and_a_drawn_line_ends_on_the_paper() -> None:
     d, colour = graph_paper()
     d[80:160, 84:87] = 0.6  # a drawn line as dark as the heavier rules, between two rules
-    ruling = Ruling.of((d > 0.2).astype(np.uint8), [math.pi / 2, 0.0], d, None)
-    assert ruling is not None
-    assert ruling.runs_on(vertical(71.5, 40, 200), math.pi / 2)  # a heavier rule, traced across the paper
-    assert ruling.runs_on(vertical(71.5, 90, 150), math.pi / 2)  # ... or only a piece of it
-    assert not ruling.runs_on(vertical(85.0, 80, 159), math.pi / 2)  # the drawn line stops on the paper
-    across = Ruling.of((d > 0.2).astype(np.uint8), [0.0], d, None)  # only the horizontal rules count as ruled
+    lined = ruling(d, [math.pi / 2, 0.0])
+    assert lined is not None
+    assert lined.runs_on(vertical(71.5, 40, 200), math.pi / 2)  # a heavier rule, traced across the paper
+    assert lined.runs_on(vertical(71.5, 90, 150), math.pi / 2)  # ... or only a piece of it
+    assert not lined.runs_on(vertical(85.0, 80, 159), math.pi / 2)  # the drawn line stops on the paper
+    across = ruling(d, [0.0])  # only the horizontal rules count as ruled
     assert across is not None and not across.runs_on(vertical(71.5, 40, 200), math.pi / 2)
     d[:, :] = np.where(d > 0.5, 1.4, d)  # a pen darker than the heavier rules: the piece no longer runs on as dark
     d[40:200, 70:72] = 0.6
-    ruling = Ruling.of((d > 0.2).astype(np.uint8), [math.pi / 2, 0.0], d, None)
-    assert not ruling.runs_on(vertical(85.0, 80, 159), math.pi / 2)
+    lined = ruling(d, [math.pi / 2, 0.0])
+    assert not lined.runs_on(vertical(85.0, 80, 159), math.pi / 2)
 
 
 def test_the_rules_colour_is_told_from_another_pens() -> None:
     d, colour = graph_paper()
     colour[100:140, 124:127] = RED * 0.6 / np.linalg.norm(RED)
     d[100:140, 124:127] = 0.6
-    ruling = Ruling.of((d > 0.2).astype(np.uint8), [math.pi / 2, 0.0], d, colour)
-    assert ruling is not None and ruling.hue is not None
-    paints = ruling.paints(d, colour)
+    lined = ruling(d, [math.pi / 2, 0.0], colour)
+    assert lined is not None and lined.hue is not None
+    paints = lined.paints(d, colour)
     assert paints[65, 71] and paints[31, 100]  # a heavier rule and a rule, both in the rules' colour
     assert not paints[120, 125]  # the red pen
     assert not paints[0, 0]  # no ink at all is no rule's
@@ -67,14 +72,13 @@ def test_clear_rules_leaves_a_pen_and_clears_a_heavier_rule() -> None:
     rgb = np.full(d.shape + (3,), 235, np.uint8)
     rgb -= (200 * d[:, :, None] * np.where(d[:, :, None] > 0, BLUE, 0)).astype(np.uint8)  # blue rules on white
     rgb[100:140, 124:127] = (235, 80, 80)  # a red pen stroke
-    mask = (d > 0.2).astype(np.uint8)
-    ruling = Ruling.of(mask, [math.pi / 2, 0.0], d, colour)
+    paper = ruling(d, [math.pi / 2, 0.0], colour)
     clean = d.copy()
-    clear_rules(clean, d, rgb, ruling.rules, ruling.hue, np.zeros(d.shape, bool))
+    clear_rules(clean, d, rgb, paper.rules, paper.hue, np.zeros(d.shape, bool))
     assert clean[65, 71] == 0.0 and clean[31, 100] == 0.0  # a heavier rule, twice as dark as the rest, and a rule
     assert clean[120, 125] == pytest.approx(0.6)  # the pen stays
     clean = d.copy()
-    clear_rules(clean, d, rgb, ruling.rules, None, np.zeros(d.shape, bool))
+    clear_rules(clean, d, rgb, paper.rules, None, np.zeros(d.shape, bool))
     assert clean[65, 71] > 0.0  # without the rules' colour a heavier rule stays: it is as dark as a pen
 
 

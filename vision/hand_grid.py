@@ -48,7 +48,7 @@ from .errors import NoBoardError
 from .grid_lines import _median
 from .ink import colour_at, ink_threshold, unit
 from .polylines import extend, first_crossing, resample
-from .ruling import HUE_DEG, Ruling, is_ruled, without_rules
+from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
 
@@ -434,8 +434,9 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     ruled_a, ruled_b = is_ruled(fa, side), is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
     # evenly spaced tracks with no long straight run of ink among them are no ruling to clear
-    own = Ruling.of(mask, ruled, d, colour) if ruled else None
-    rules = own.rules if own is not None else None
+    rules = r if ruled and (r := rules_mask(mask, ruled, max(9, int(0.06 * side)))).any() else None
+    # (the search above the rules judges tracks by the ruling it was given: its own only joins the clearing)
+    own = Ruling.of(rules, ruled, d, colour) if rules is not None and not above else None
     if own is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
         darker = 1.6 * float(np.median(d[own.rules > 0]))
         # first with the rules' colour left out (a pen of another colour), then all of that ink

@@ -92,12 +92,9 @@ class Ruling:
     by_colour: bool = False  # whether ink in the rules' colour is left out of the search (:meth:`paints`)
 
     @classmethod
-    def of(cls, mask: np.ndarray, phis: list[float], d: np.ndarray, colour: np.ndarray | None) -> Ruling | None:
-        """The ruling along ``phis`` in an ink mask of darkness map ``d``; None where no long
-        straight runs show."""
-        rules = rules_mask(mask, phis, max(9, int(0.06 * max(d.shape))))
-        if not rules.any():
-            return None
+    def of(cls, rules: np.ndarray, phis: list[float], d: np.ndarray, colour: np.ndarray | None) -> Ruling:
+        """The ruling whose lines along ``phis`` are ``rules`` (:func:`rules_mask`, not empty)
+        in darkness map ``d``, of RGB darkness ``colour`` if known."""
         paper = np.zeros_like(rules)
         cv2.fillConvexPoly(paper, cv2.convexHull(cv2.findNonZero(rules)), 1)
         hue = unit(np.median(colour[rules > 0], axis=0)) if colour is not None else None
