@@ -1,6 +1,7 @@
 """The '#' finder's array shortcuts give what the plain definitions give: the stroke width
 (run lengths), the first crossing of two polylines (tried only where segment boxes meet) and
-the Radon directions (in chunks of angles), on random inputs, to the last bit."""
+the Radon directions (in chunks of angles), on random inputs, to the last bit; and the copy
+the '#' is sought on, taken from the photo itself at a whole factor."""
 
 from __future__ import annotations
 
@@ -92,3 +93,21 @@ def test_directions_equal_the_one_pass_energy(seed: int) -> None:
     i = int(np.argmax(energy))
     phi_a, _ = hand_grid._directions(mask, hand_grid._stroke_width(mask))
     assert phi_a == float(np.mod(th[i] + np.pi / 2, np.pi))
+
+
+@pytest.mark.parametrize(("h", "w", "k"),
+                         [(720, 960, 2), (1080, 1440, 3), (480, 640, 0), (721, 960, 0), (1200, 1600, 0)])
+def test_search_copy_takes_whole_factors_from_the_photo(h: int, w: int, k: int) -> None:
+    """A photo that a whole 2 or 3 brings to about 480 px gives its own k x k block means
+    (one area shrink, not two); any other photo, the working copy shrunk to 480 px."""
+    rng = np.random.default_rng(h + w)
+    photo = rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+    working = rng.integers(0, 256, (300, 400, 3), dtype=np.uint8)  # stands apart from the photo
+    got = hand_grid.search_copy(working, photo)
+    if k:
+        blocks = photo.reshape(h // k, k, w // k, k, 3).astype(np.float64).mean(axis=(1, 3))
+        assert got.shape == (h // k, w // k, 3)
+        assert np.abs(got - blocks).max() <= 0.5 + 1e-9  # the means, rounded
+    else:
+        assert got.shape == (360, 480, 3)
+        assert np.array_equal(got, hand_grid.search_copy(working))

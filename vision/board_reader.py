@@ -76,7 +76,7 @@ from .grid_lines import (
     _segments,
     _union_length,
 )
-from .hand_grid import GRID_SIDE_PX, erase_mask, find_hash_grid
+from .hand_grid import erase_mask, find_hash_grid, search_copy
 from .ink import _apply, _as_rgb, ink_colour, ink_map
 from .reading import EMPTY, BoardReading, O, X
 from .ruling import clear_rules
@@ -145,7 +145,7 @@ class BoardReader:
         in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
         :func:`debug_image`.
         """
-        rgb = _as_rgb(image)
+        rgb = photo = _as_rgb(image)
         h0, w0 = rgb.shape[:2]
         scale = min(1.0, self.max_side_px / max(h0, w0))
         if scale < 1.0:
@@ -170,7 +170,7 @@ class BoardReader:
                 for key in ("lines", "cols", "rows", "lattice", "nodes", "extension"):
                     trace.pop(key, None)
             try:
-                H, err, npts, frame, n, probs, feats, inputs = self._read_hash(rgb, d, trace)
+                H, err, npts, frame, n, probs, feats, inputs = self._read_hash(rgb, d, trace, photo)
             except NoBoardError as hand:
                 raise NoBoardError(f"{straight.reason}; as a hand-drawn '#': {hand.reason}") from None
         if trace is not None and "hash_to_px" in trace:  # the '#' was read: its px to the image's
@@ -185,16 +185,17 @@ class BoardReader:
         return BoardReading(cells.astype(np.int64), conf, probs, H, float(err), npts, frame, feats)
 
     # -- hand-drawn '#' -------------------------------------------------------------
-    def _read_hash(self, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object] | None
+    def _read_hash(self, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object] | None,
+                   photo: np.ndarray | None = None
                    ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray,
                               np.ndarray]:
         """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found in
-        the ink of a copy of the photo :data:`GRID_SIDE_PX` on its longer side (the same scale
-        whatever the camera), its lines erased from the ink ``d``, the cells read with the
-        outer cells reaching past the field."""
+        the ink of a copy of the photo 480 px on its longer side (the same scale whatever the
+        camera; :func:`~kinegym.vision.hand_grid.search_copy` makes it from the working copy
+        ``rgb`` or, at a whole factor, from the ``photo`` itself), its lines erased from the ink
+        ``d``, the cells read with the outer cells reaching past the field."""
         h, w = d.shape
-        f = GRID_SIDE_PX / max(h, w)
-        small = cv2.resize(rgb, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
+        small = search_copy(rgb, photo)
         stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
         dg = ink_map(small, stroke_px=stroke)
         sizes = (self.size,) if self.size is not None else (3, 5)

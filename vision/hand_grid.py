@@ -50,7 +50,7 @@ from .ink import colour_at, ink_threshold, unit
 from .polylines import extend, first_crossing, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
-__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask"]
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask", "search_copy"]
 
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
@@ -95,6 +95,22 @@ class HashGrid:
     error_px: float
     rules: np.ndarray | None = None  # uint8 mask of ruled paper's lines, if the paper is ruled
     rule_hue: np.ndarray | None = None  # their unit RGB darkness, if the colour is known
+
+
+def search_copy(working: np.ndarray, photo: np.ndarray | None = None) -> np.ndarray:
+    """The copy of a photo the '#' is sought on, about :data:`GRID_SIDE_PX` on its longer side:
+    the ``photo``'s own means over k x k blocks where a whole k of 2 or 3 divides both its sides
+    and gets within 10 % of that (OpenCV's area shrink is ten times faster at a whole factor: a
+    960 x 720 frame halves in 0.25 ms, its 800 px working copy takes 3-4 ms to 480), else the
+    ``working`` copy shrunk by area."""
+    if photo is not None:
+        h, w = photo.shape[:2]
+        k = int(round(max(h, w) / GRID_SIDE_PX))
+        if k in (2, 3) and not h % k and not w % k and abs(max(h, w) / k - GRID_SIDE_PX) <= 0.1 * GRID_SIDE_PX:
+            return cv2.resize(photo, (w // k, h // k), interpolation=cv2.INTER_AREA)
+    h, w = working.shape[:2]
+    f = GRID_SIDE_PX / max(h, w)
+    return cv2.resize(working, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
 
 
 def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0) -> tuple[np.ndarray, float, float]:
