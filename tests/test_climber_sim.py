@@ -102,6 +102,37 @@ def test_static_torques_match_the_physics() -> None:
     assert best < 1.0
 
 
+def test_a_gripper_opens_over_its_release_time_and_hands_its_load_on() -> None:
+    """``_let_go`` ramps the grip's force cap from what it carries to zero over
+    ``grip_release_s`` (the other two arms take the load while the hand is still on its
+    hole), then removes the grip; with a release time of 0 the grip goes at once."""
+    import dataclasses
+
+    st = (0, 1, 8)
+    sim = PhysicsClimber(MODEL)
+    sim.reset(WALL, st)
+    grip = sim.grips[0]
+    carried = abs(grip.impulse) / sim.dt
+    caps = []
+    step = sim.space.step
+
+    def stepped(dt: float) -> None:
+        caps.append(grip.max_force)
+        step(dt)
+
+    sim.space.step = stepped  # type: ignore[method-assign]
+    assert sim._let_go(0) is None
+    assert sim.grips[0] is None and sim.grips[1] is not None and sim.grips[2] is not None
+    assert len(caps) == round(MODEL.phys.grip_release_s * MODEL.phys.physics_hz)
+    assert caps[0] == pytest.approx(carried) and caps[-1] < carried / len(caps) + 1e-9
+    assert all(a >= b for a, b in zip(caps, caps[1:]))  # it only ever opens
+    instant = dataclasses.replace(MODEL, phys=dataclasses.replace(MODEL.phys, grip_release_s=0.0))
+    sim = PhysicsClimber(instant)
+    sim.reset(WALL, st)
+    before = sim.total_steps
+    assert sim._let_go(0) is None and sim.grips[0] is None and sim.total_steps == before
+
+
 def test_physics_holds_still_and_the_encoders_are_noisy_but_close() -> None:
     sim = PhysicsClimber(MODEL)
     st = (0, 1, 8)

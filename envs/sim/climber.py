@@ -6,7 +6,8 @@ module moves the robot with the gait the seed sketches - move the centre, then o
 
 1. **shift** - with all three hands gripping, the body moves in a straight line to a new
    pose (inverse kinematics of all three arms along the way);
-2. **release** the moving arm's gripper;
+2. **release** the moving arm's gripper: it opens over ``grip_release_s``, its share of the
+   load passing to the other two arms;
 3. **swing** its hand in a straight line to the new hole (the other two arms hold the body);
 4. **grip** when the hand is within the capture radius of the hole.
 
@@ -251,6 +252,38 @@ class PhysicsClimber(ClimberSim):
             self.space.remove(j)
             self.grips[k] = None
 
+    def _let_go(self, arm: int) -> tuple[str, str, str] | None:
+        """Open arm ``arm``'s gripper as a real one opens, over ``grip_release_s``: the grip's
+        force cap ramps from the force it carries down to zero while every servo holds its
+        pose, so the hand's share of the load passes to the holding arms quasi-statically
+        (removing the joint at once dropped it on them in one step, and the lightly damped
+        body mode overshot past the servo limits). Then the joint goes. None once the hand is
+        free; ``(outcome, reason, phase)`` if a holding servo stalls or the body sags on the
+        way (the gripper closes again: the hand never left its hole) or a gripper lets go."""
+        j = self.grips[arm]
+        p = self.model.phys
+        t_open = p.grip_release_s
+        if j is None or t_open <= 0.0:
+            self._release(arm)
+            return None
+        f0 = abs(j.impulse) / self.dt  # the force the grip carries now (below holding_force_n)
+
+        def opening(t: float) -> None:
+            j.max_force = f0 * max(0.0, 1.0 - t / t_open)
+
+        lost = self._run(int(round(t_open / self.dt)), opening,
+                         until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
+        if lost in ("torque_limit", "sagged"):
+            j.max_force = math.inf
+            self._run(int(0.3 / self.dt), lambda t: None, stall=False)
+            what = f"{self.stalled} stalled" if lost == "torque_limit" else \
+                f"the body sagged {p.sag_abort_cm:g} cm (a holding servo gave way)"
+            return "torque_limit", f"{what} while arm {arm + 1}'s gripper opened; it closed again", "swing"
+        if lost:
+            return lost, f"a gripper let go while arm {arm + 1}'s gripper opened", "swing"
+        self._release(arm)
+        return None
+
     # -- state ----------------------------------------------------------------------------
     @property
     def pose(self) -> np.ndarray:  # type: ignore[override]
@@ -273,7 +306,7 @@ class PhysicsClimber(ClimberSim):
         kp, vmax = p.servo_gain_per_s, math.radians(p.servo_speed_dps)
         ks = p.servo_stiffness_ncm_per_deg * 100.0 * 180.0 / math.pi  # kg cm^2 / s^2 per rad
         ts_max, te_max = p.shoulder_torque_ncm * 100.0, p.elbow_torque_ncm * 100.0
-        floor_s, floor_e = 0.15 * ts_max, 0.15 * te_max
+        floor_s, floor_e = p.servo_floor_share * ts_max, p.servo_floor_share * te_max
         b = self.body
         prev = self._prev_targets if self._prev_targets is not None else self.targets
         inv_dt = 1.0 / self.dt
@@ -382,7 +415,9 @@ class PhysicsClimber(ClimberSim):
         # 2. release, 3. swing along a straight line in the wall frame, 4. grip
         old = held[arm]
         new = tuple(self.holes.xy[hole])
-        self._release(arm)
+        lost = self._let_go(arm)
+        if lost:
+            return result(*lost)
         seg = _path_length(self._shoulder(target_pose, arm), old, new, turn)
         t_swing = max(0.2, seg / p.swing_speed_cm_s)
         n_swing = int(t_swing / self.dt)
