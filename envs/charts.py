@@ -17,11 +17,16 @@ import numpy as np
 __all__ = ["line_chart"]
 
 
+#: A series with at most this many points is drawn with markers whatever ``markers`` says.
+FEW_POINTS = 30
+
+
 def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title: str, xlabel: str,
                ylabel: str, size: tuple[int, int] = (720, 420), log_x: bool = False,
                ylim: tuple[float, float] | None = None, markers: bool = True) -> np.ndarray:
     """A line chart of named ``(x, y)`` series as an RGB array ``size`` = (width, height) px:
-    one colour per series (with markers unless ``markers=False``), a legend (when there is
+    one colour per series (with markers unless ``markers=False``; a series of at most
+    :data:`FEW_POINTS` points always has them: one point alone draws no line), a legend (when there is
     more than one series), ``title``, axis labels (give units: "time (s)"), a log x axis with
     ``log_x``, fixed y limits with ``ylim``. Non-finite y values leave gaps."""
     import matplotlib
@@ -39,7 +44,7 @@ def line_chart(series: dict[str, tuple[Sequence[float], Sequence[float]]], title
     for name, (x, y) in series.items():
         y_arr = np.asarray(y, float)
         ax.plot(np.asarray(x, float), np.where(np.isfinite(y_arr), y_arr, np.nan), label=name, linewidth=1.6,
-                marker="o" if markers else None, markersize=4)
+                marker="o" if markers or len(y_arr) <= FEW_POINTS else None, markersize=4)
     if log_x:
         ax.set_xscale("log")
         xs = sorted({float(v) for x, _ in series.values() for v in np.asarray(x, float).ravel() if v > 0})

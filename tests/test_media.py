@@ -24,6 +24,16 @@ def test_charts_are_rgb_arrays_of_the_asked_size() -> None:
     x = np.linspace(0, 2, 50)
     img = line_chart({"a": (x, np.sin(x)), "b": (x, np.cos(x))}, "t", "time (s)", "value (cm)", size=(640, 360))
     assert img.shape == (360, 640, 3) and img.dtype == np.uint8 and img.std() > 10
+    # a series of one point (a run with a single validation) still shows, markers or not: against
+    # the same chart with that point missing (same legend), its marker adds orange (C1) pixels
+    long = (np.linspace(0, 1, 100), np.full(100, 0.5))
+
+    def orange(point: float) -> int:
+        img = line_chart({"train": long, "validation": ([0.5], [point])}, "t", "steps", "success",
+                         ylim=(0, 1.02), markers=False).astype(int)
+        return int(((img[..., 0] - img[..., 2] > 120) & (img[..., 1] > 80)).sum())
+
+    assert orange(0.9) > orange(float("nan")) + 10
     live = live_chart({"a": (x, np.sin(x)), "b": (x, np.cos(x))}, "pen x", "t (s)", "cm")
     assert live.shape == (160, 345, 3)
 
