@@ -58,19 +58,29 @@ class ClimbRobot:
         res = self.sim.move(arm, hole)
         return res.outcome, res.reason
 
-    def relocalise(self, moved_arm: int | None, rng: np.random.Generator) -> None:
-        """Read the encoders and track the fix (the robot's own view of its pose)."""
+    def relocalise(self, moved_arm: int | None, rng: np.random.Generator, hole: int | None = None) -> None:
+        """Read the encoders and track the fix (the robot's own view of its pose).
+
+        ``moved_arm`` (1..3) moved and gripped map row ``hole``. When the reading fails the
+        tracking gate (a noisy reading: about one in a few thousand), the robot still knows
+        which hole its gripper closed on, so the pose is fitted on that stance, and if that
+        fails too the stance is believed without a pose (before, it kept believing the old
+        hole and judged every later move from a stance it had left)."""
         q = self.sim.encoders(rng)
         prev = self.est_holes
+        expected = prev
+        if moved_arm is not None and hole is not None:
+            held = list(prev)
+            held[moved_arm - 1] = int(hole)
+            expected = (held[0], held[1], held[2])
         try:
             self.fix = self.loc.track(prev, q, moved_arm)
         except (NoFixError, AmbiguousFixError):
             try:
-                self.fix = self.loc.track(prev, q, None) if moved_arm is not None else self.loc.localize(q)
+                self.fix = self.loc.track(expected, q, None) if moved_arm is not None else self.loc.localize(q)
             except (NoFixError, AmbiguousFixError):
-                self.fix = None  # lost: keep the last belief, report a large uncertainty
-        if self.fix is not None:
-            self.est_holes = self.fix.holes
+                self.fix = None  # lost: believe the stance it knows of, report a large uncertainty
+        self.est_holes = self.fix.holes if self.fix is not None else expected
 
     def est_pose(self) -> np.ndarray:
         """The estimated body pose ``(x, y, heading)``; the centroid of the believed holes when lost."""

@@ -269,7 +269,8 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
             self._failed.add((self.believed_stance, arm, hole))
         fell = outcome == "fell"
         if not fell:
-            self.robot.relocalise(arm + 1 if outcome == "ok" else None, self.np_random)
+            ok = outcome == "ok"
+            self.robot.relocalise(arm + 1 if ok else None, self.np_random, hole if ok else None)
             self._visits[self.believed_stance] = self._visits.get(self.believed_stance, 0) + 1
         dist = self.task.goal_distance(self.sim.pose)
         success = self.goal in self.sim.stance and not fell

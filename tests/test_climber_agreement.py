@@ -141,3 +141,32 @@ def test_the_planner_climbs_in_physics_where_a_stalled_swing_used_to_fall() -> N
             done = term or trunc
             assert info["outcome"] != "fell", (i, info["reason"])
         assert info["is_success"], (i, info)
+
+
+def test_a_reading_that_fails_the_tracking_gate_after_a_good_move_does_not_lose_the_move() -> None:
+    """A noisy reading can fail the localiser's gate after a move that went well (about one in
+    a few thousand moves; a planner climb of the warm start's pool stuck on it). The robot knows
+    which hole its gripper closed on: it believes that stance, not the one it left."""
+    from kinegym.kinematics.pose_fit import NoFixError
+
+    env = gym.make("kinegym/HoleClimb-v0")
+    u = env.unwrapped
+    obs, info = env.reset(seed=3)
+    loc = u.robot.loc
+    real = loc.track
+
+    def gate_fails(previous: object, q: object, moved_arm: int | None) -> object:
+        if moved_arm is not None:
+            raise NoFixError("injected: the reading fails the gate")
+        return real(previous, q, moved_arm)
+
+    loc.track = gate_fails
+    a = PlannerAgent().act(u, obs)
+    obs, r, term, trunc, info = env.step(a)
+    assert info["outcome"] == "ok"
+    assert u.believed_stance == u.sim.stance  # the moved arm's new hole, not the old one
+    assert u.robot.fix is not None  # the pose refitted on the stance it knows of
+    loc.track = lambda previous, q, moved_arm: (_ for _ in ()).throw(NoFixError("injected"))
+    a = PlannerAgent().act(u, obs)
+    obs, r, term, trunc, info = env.step(a)
+    assert info["outcome"] == "ok" and u.believed_stance == u.sim.stance and u.robot.fix is None
