@@ -166,7 +166,10 @@ def test_a_reading_that_fails_the_tracking_gate_after_a_good_move_does_not_lose_
     assert info["outcome"] == "ok"
     assert u.believed_stance == u.sim.stance  # the moved arm's new hole, not the old one
     assert u.robot.fix is not None  # the pose refitted on the stance it knows of
-    loc.track = lambda previous, q, moved_arm: (_ for _ in ()).throw(NoFixError("injected"))
+    def every_fit_fails(previous: object, q: object, moved_arm: int | None) -> object:
+        raise NoFixError("injected: no fit at all")
+
+    loc.track = every_fit_fails
     a = PlannerAgent().act(u, obs)
     obs, r, term, trunc, info = env.step(a)
     assert info["outcome"] == "ok" and u.believed_stance == u.sim.stance and u.robot.fix is None

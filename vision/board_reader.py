@@ -190,9 +190,10 @@ class BoardReader:
                    ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray,
                               np.ndarray]:
         """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found in
-        the ink of a copy of the photo 480 px on its longer side (the same scale whatever the
-        camera; :func:`~kinegym.vision.hand_grid.search_copy` makes it from the working copy
-        ``rgb`` or, at a whole factor, from the ``photo`` itself), its lines erased from the ink
+        the ink of a copy of the photo :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its
+        longer side (the same scale whatever the camera;
+        :func:`~kinegym.vision.hand_grid.search_copy` makes it from the working copy ``rgb`` or,
+        at a whole factor, from the ``photo`` itself), its lines erased from the ink
         ``d``, the cells read with the outer cells reaching past the field."""
         h, w = d.shape
         small = search_copy(rgb, photo)

@@ -276,13 +276,19 @@ class PhysicsClimber(ClimberSim):
         if lost in ("torque_limit", "sagged"):
             j.max_force = math.inf
             self._run(int(0.3 / self.dt), lambda t: None, stall=False)
-            what = f"{self.stalled} stalled" if lost == "torque_limit" else \
-                f"the body sagged {p.sag_abort_cm:g} cm (a holding servo gave way)"
+            what = self._gave_way(lost)
             return "torque_limit", f"{what} while arm {arm + 1}'s gripper opened; it closed again", "swing"
         if lost:
             return lost, f"a gripper let go while arm {arm + 1}'s gripper opened", "swing"
         self._release(arm)
         return None
+
+    def _gave_way(self, lost: str) -> str:
+        """What gave way, for a reason: the servo that stalled (``lost == "torque_limit"``) or
+        the sag that stopped the motion (``"sagged"``)."""
+        if lost == "torque_limit":
+            return f"{self.stalled} stalled"
+        return f"the body sagged {self.model.phys.sag_abort_cm:g} cm (a holding servo gave way)"
 
     # -- state ----------------------------------------------------------------------------
     @property
@@ -438,8 +444,7 @@ class PhysicsClimber(ClimberSim):
 
         lost = self._run(n_swing, swing, until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
         if lost in ("torque_limit", "sagged"):  # a servo stalled, or the body sags: the hand goes back to its hole
-            what = f"{self.stalled} stalled" if lost == "torque_limit" else \
-                f"the body sagged {p.sag_abort_cm:g} cm (a holding servo gave way)"
+            what = self._gave_way(lost)
             return self._swing_back(arm, swing, n_swing, old, result, "torque_limit",
                                     f"{what} while arm {arm + 1} swung; the hand went back to its hole")
         if lost:
