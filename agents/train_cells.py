@@ -5,8 +5,9 @@ each with the hand rule, and keeps the cells of every board whose grid was found
 true cell centre falls in its own cell; the classifier cannot mend a wrong grid). It then:
 
 1. splits the photos (never the cells of one photo) into training and held-out parts;
-2. fits the network by Adam on the training cells and their 8 rotations and mirror images
-   (:func:`~kinegym.vision.cell_model.dihedral`), weight decay against over-fitting;
+2. fits the network in torch (one thread) by AdamW on the training cells, each batch's windows
+   turned and mirrored at random (an X turned is still an X), weight decay against
+   over-fitting, and hands the weights to the numpy :class:`~kinegym.vision.cell_model.CellModel`;
 3. fits the softmax temperature on the held-out cells (least negative log-likelihood), so the
    confidences are calibrated, and reports accuracy and expected calibration error (ECE)
    before and after.
@@ -35,12 +36,23 @@ from pathlib import Path
 import numpy as np
 
 from kinegym.vision.board_reader import BoardReader, NoBoardError
-from kinegym.vision.cell_model import N_INPUTS, SHIPPED_MODEL, CellModel, dihedral, rule_probs
+from kinegym.vision.cell_model import (
+    N_CHANNELS,
+    N_INPUTS,
+    N_SCALARS,
+    SHIPPED_MODEL,
+    WIN,
+    CellModel,
+    channels,
+    rule_probs,
+)
 from kinegym.vision.ink import _apply
 
 __all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "expected_calibration_error", "main"]
 
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
+#: channels of the network's three convolutions
+CONVS = (16, 32, 64)
 _MAX_CACHE_BYTES = 2 << 30  # 100,000 photos' cells, compressed, stay well under this
 
 
@@ -168,11 +180,6 @@ def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 
     return data
 
 
-def _softmax(z: np.ndarray) -> np.ndarray:
-    z = np.exp(z - z.max(axis=1, keepdims=True))
-    return z / z.sum(axis=1, keepdims=True)
-
-
 def expected_calibration_error(p: np.ndarray, y: np.ndarray, bins: int = 10) -> float:
     """ECE: over bins of the top probability, the cell-weighted gap between it and the accuracy."""
     top, hit = p.max(axis=1), (p.argmax(axis=1) == y)
@@ -185,43 +192,58 @@ def expected_calibration_error(p: np.ndarray, y: np.ndarray, bins: int = 10) -> 
     return gap / max(len(y), 1)
 
 
-def fit(x: np.ndarray, y: np.ndarray, hidden: int = 96, epochs: int = 30, lr: float = 2e-3, decay: float = 1e-3,
-        seed: int = 0, progress: bool = True) -> CellModel:
-    """Fit the network (temperature 1) by Adam on softmax cross-entropy with weight decay,
-    on ``x`` and its dihedral copies."""
-    rng = np.random.default_rng(seed)
-    xa, ya = dihedral(x), np.tile(y, 8)
-    mean = xa.mean(axis=0)
-    scale = np.maximum(xa.std(axis=0), 1e-3)
-    z_all = ((xa - mean) / scale).astype(np.float32)
-    params = [rng.normal(0, np.sqrt(2.0 / N_INPUTS), (N_INPUTS, hidden)).astype(np.float32),
-              np.zeros(hidden, np.float32),
-              rng.normal(0, np.sqrt(1.0 / hidden), (hidden, 3)).astype(np.float32), np.zeros(3, np.float32)]
-    m1 = [np.zeros_like(p) for p in params]
-    m2 = [np.zeros_like(p) for p in params]
-    batch, step = 512, 0
-    onehot = np.eye(3, dtype=np.float32)
-    bar = _Ticker(epochs, "epochs", progress)
-    for _ in range(epochs):
-        order = rng.permutation(len(ya))
-        for i in range(0, len(order), batch):
-            idx = order[i:i + batch]
-            z, t = z_all[idx], onehot[ya[idx]]
-            w1, b1, w2, b2 = params
-            pre = z @ w1 + b1
-            h = np.maximum(pre, 0.0)
-            g = (_softmax(h @ w2 + b2) - t) / len(idx)
-            gh = (g @ w2.T) * (pre > 0)
-            grads = [z.T @ gh + decay * w1, gh.sum(axis=0), h.T @ g + decay * w2, g.sum(axis=0)]
-            step += 1
-            for k, (p, gr) in enumerate(zip(params, grads)):
-                m1[k] = 0.9 * m1[k] + 0.1 * gr
-                m2[k] = 0.999 * m2[k] + 0.001 * gr * gr
-                mh, vh = m1[k] / (1 - 0.9 ** step), m2[k] / (1 - 0.999 ** step)
-                p -= (lr * mh / (np.sqrt(vh) + 1e-8)).astype(np.float32)
-        bar.update()
-    w1, b1, w2, b2 = params
-    return CellModel(mean.astype(np.float32), scale.astype(np.float32), w1, b1, w2, b2)
+def fit(x: np.ndarray, y: np.ndarray, hidden: int = 128, epochs: int = 15, lr: float = 3e-3, decay: float = 1e-3,
+        seed: int = 0, progress: bool = True, convs: tuple[int, int, int] = CONVS) -> CellModel:
+    """Fit the network (temperature 1) in torch, one thread (so the same arguments give the same
+    weights): AdamW with weight decay on softmax cross-entropy, a one-cycle learning rate peaking
+    at ``lr``, each batch's windows turned and mirrored at random (an X turned is still an X).
+    ``convs``: the three convolutions' channels. The weights are handed to the numpy
+    :class:`CellModel`, which is what reads."""
+    import torch
+    from torch import nn
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        gen = torch.Generator().manual_seed(seed)
+        torch.manual_seed(seed)
+        chans, scalars = channels(x), np.asarray(x, np.float32)[:, WIN * WIN:]
+        cmean, cscale = chans.mean(axis=(0, 2, 3)), np.maximum(chans.std(axis=(0, 2, 3)), 1e-3)
+        smean, sscale = scalars.mean(axis=0), np.maximum(scalars.std(axis=0), 1e-3)
+        ct = torch.from_numpy(((chans - cmean[:, None, None]) / cscale[:, None, None]).astype(np.float32))
+        st = torch.from_numpy(((scalars - smean) / sscale).astype(np.float32))
+        yt = torch.from_numpy(np.asarray(y, np.int64))
+        c1, c2, c3 = convs
+        feats = nn.Sequential(nn.Conv2d(N_CHANNELS, c1, 3, padding=1), nn.ReLU(), nn.MaxPool2d(2),
+                              nn.Conv2d(c1, c2, 3, padding=1), nn.ReLU(), nn.MaxPool2d(2),
+                              nn.Conv2d(c2, c3, 3, padding=1), nn.ReLU(), nn.MaxPool2d(2), nn.Flatten())
+        head = nn.Sequential(nn.Linear(c3 * (WIN // 8) ** 2 + N_SCALARS, hidden), nn.ReLU(), nn.Linear(hidden, 3))
+        params = [*feats.parameters(), *head.parameters()]
+        opt = torch.optim.AdamW(params, lr, weight_decay=decay)
+        batch = 256
+        steps = max(1, epochs * -(-len(yt) // batch))
+        sched = torch.optim.lr_scheduler.OneCycleLR(opt, lr, total_steps=steps)
+        bar = _Ticker(epochs, "epochs", progress)
+        for _ in range(epochs):
+            order = torch.randperm(len(yt), generator=gen)
+            for i in range(0, len(yt), batch):
+                idx = order[i:i + batch]
+                c = torch.rot90(ct[idx], int(torch.randint(0, 4, (), generator=gen)), (2, 3))
+                if bool(torch.rand((), generator=gen) < 0.5):
+                    c = torch.flip(c, (3,))
+                logits = head(torch.cat([feats(c), st[idx]], dim=1))
+                loss = nn.functional.cross_entropy(logits, yt[idx])
+                opt.zero_grad()
+                loss.backward()
+                opt.step()
+                sched.step()
+            bar.update()
+        w = [p.detach().numpy().astype(np.float32) for p in params]
+    finally:
+        torch.set_num_threads(threads)
+    return CellModel(cmean.astype(np.float32), cscale.astype(np.float32), smean.astype(np.float32),
+                     sscale.astype(np.float32), w[0], w[1], w[2], w[3], w[4], w[5], w[6].T.copy(), w[7],
+                     w[8].T.copy(), w[9])
 
 
 def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
@@ -238,9 +260,9 @@ def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
     return best
 
 
-def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 96,
-          epochs: int = 30, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True,
-          cells: str | Path | None = None) -> tuple[CellModel, dict[str, object]]:
+def train(real_like: int = 3000, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 128,
+          epochs: int = 15, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True,
+          cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS) -> tuple[CellModel, dict[str, object]]:
     """Collect (or reuse ``cells``, see :func:`load_or_collect`), fit, calibrate (module
     docstring): the model and its report."""
     data = load_or_collect(cells, real_like, hard, workers, progress) if cells else collect(real_like, hard, workers,
@@ -250,7 +272,8 @@ def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers
     rng = np.random.default_rng(seed)
     photos = np.unique(data.photo)
     test = np.isin(data.photo, rng.choice(photos, max(1, int(round(held_out * len(photos)))), replace=False))
-    model = fit(data.x[~test], data.y[~test], hidden, epochs, decay=decay, seed=seed, progress=progress)
+    model = fit(data.x[~test], data.y[~test], hidden, epochs, decay=decay, seed=seed, progress=progress,
+                convs=convs)
     model.rule_weight = float(rule_weight)
     xt, yt = data.x[test], data.y[test]
     before = model.probs(xt)
@@ -259,7 +282,8 @@ def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers
     rule = rule_probs(xt)
     report: dict[str, object] = {
         "photos": data.photos, "photos_with_right_grid": data.kept, "cells_train": int((~test).sum()),
-        "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "hidden": hidden, "epochs": epochs,
+        "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "convs": list(convs), "hidden": hidden,
+        "epochs": epochs,
         "decay": decay, "rule_weight": rule_weight, "seed": seed, "temperature": round(model.temperature, 4),
         "held_out_accuracy": round(float((after.argmax(1) == yt).mean()), 5),
         "held_out_accuracy_rule": round(float((rule.argmax(1) == yt).mean()), 5),
@@ -272,10 +296,12 @@ def train(real_like: int = 2400, hard: int = 600, held_out: float = 0.2, workers
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m kinegym.agents.train_cells", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--real-like", type=int, default=2400, help="real-like photos (default 2400)")
+    ap.add_argument("--real-like", type=int, default=3000, help="real-like photos (default 3000)")
     ap.add_argument("--hard", type=int, default=600, help="hard rendered photos (default 600)")
-    ap.add_argument("--hidden", type=int, default=96, help="hidden units (default 96)")
-    ap.add_argument("--epochs", type=int, default=30, help="passes over the data (default 30)")
+    ap.add_argument("--convs", default=",".join(map(str, CONVS)),
+                    help=f"channels of the three convolutions (default {','.join(map(str, CONVS))})")
+    ap.add_argument("--hidden", type=int, default=128, help="hidden units (default 128)")
+    ap.add_argument("--epochs", type=int, default=15, help="passes over the data (default 15)")
     ap.add_argument("--decay", type=float, default=1e-3, help="weight decay (default 0.001)")
     ap.add_argument("--rule-weight", type=float, default=0.3,
                     help="weight of the hand rule's log-probabilities, a prior (default 0.3; 0..10)")
@@ -296,9 +322,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         value = getattr(args, name)
         if not 0 <= value <= hi:
             ap.error(f"--{name.replace('_', '-')} {value}; expected 0..{hi:g}")
+    try:
+        convs = tuple(int(v) for v in args.convs.split(","))
+    except ValueError:
+        convs = ()
+    if len(convs) != 3 or not all(1 <= v <= 256 for v in convs):
+        ap.error(f"--convs {args.convs}; expected three channel counts in 1..256, like {','.join(map(str, CONVS))}")
     model, report = train(args.real_like, args.hard, workers=max(1, args.workers), hidden=max(1, args.hidden),
                           epochs=args.epochs, decay=args.decay, rule_weight=args.rule_weight, seed=args.seed,
-                          cells=args.cells)
+                          cells=args.cells, convs=convs)  # type: ignore[arg-type]
     path = write_atomic(args.out, model.to_bytes(), suffixes=(".npz",), what="cell model")
     print(json.dumps(report, indent=1))
     print(f"wrote {path}")

@@ -21,7 +21,7 @@ from kinegym.agents.train_cells import (
 from kinegym.configs.io import FileError
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader, NoBoardError, VisionError
-from kinegym.vision.cell_model import CROPS, N_INPUTS, POOL, CellModel, cell_inputs, dihedral
+from kinegym.vision.cell_model import N_CHANNELS, N_INPUTS, WIN, CellModel, cell_inputs, channels
 from kinegym.vision.cells import _probabilities, board_features
 
 S, O = 40, 20  # rectified cell and margin (px), as the reader uses
@@ -61,37 +61,62 @@ def test_cell_inputs_see_each_cells_ink_relative_to_the_lines() -> None:
     feats = board_features(rect, 3, S, O, 0.1, 0.1, 0.0)
     x = cell_inputs(rect, 3, S, O, feats, _probabilities(feats, ref), ref)
     assert x.shape == (9, N_INPUTS) and x.dtype == np.float32
-    # the max-pooled crop's middle (the window reaches a quarter cell into the neighbours)
-    middle = x[:, POOL * POOL:2 * POOL * POOL].reshape(9, POOL, POOL)[:, 3:7, 3:7].reshape(9, -1)
+    # the window's middle (it reaches a quarter cell into the neighbours)
+    q = WIN // 4
+    middle = x[:, :WIN * WIN].reshape(9, WIN, WIN)[:, q:-q, q:-q].reshape(9, -1)
     marked = truth.reshape(-1) > 0
     assert (middle[marked].max(axis=1) > middle[~marked].max(axis=1).max()).all()
-    assert np.isclose(x[0, -1], ref) and (x[:, :CROPS * POOL * POOL] <= 2.0).all()
+    assert np.isclose(x[0, -1], ref) and (x[:, :WIN * WIN] <= 2.0).all()
     # twice the ink with twice as dark lines reads the same
     x2 = cell_inputs(2 * rect, 3, S, O, board_features(2 * rect, 3, S, O, 0.2, 0.2, 0.0),
                      _probabilities(feats, ref), 2 * ref)
-    np.testing.assert_allclose(x2[:, :CROPS * POOL * POOL], x[:, :CROPS * POOL * POOL], atol=1e-5)
+    np.testing.assert_allclose(x2[:, :WIN * WIN], x[:, :WIN * WIN], atol=1e-5)
+    # the views: as it is, its square root, over the window's darkest (a pale X is an X)
+    views = channels(x)
+    assert views.shape == (9, N_CHANNELS, WIN, WIN)
+    np.testing.assert_allclose(views[:, 1], np.sqrt(views[:, 0]), rtol=1e-6)
+    np.testing.assert_allclose(channels(0.3 * x)[marked, 2], views[marked, 2], atol=1e-5)
 
 
-def test_dihedral_copies_turn_and_mirror_the_crops_only() -> None:
-    x, _ = _inputs(np.random.default_rng(2), 2)
-    aug = dihedral(x)
-    assert aug.shape == (8 * len(x), N_INPUTS)
-    np.testing.assert_array_equal(aug[:len(x)], x)  # the first copy is the original
-    crop = x[0, :POOL * POOL].reshape(POOL, POOL)
-    np.testing.assert_array_equal(aug[len(x), :POOL * POOL].reshape(POOL, POOL), np.rot90(crop))
-    for k in range(8):
-        rest = slice(CROPS * POOL * POOL, None)
-        np.testing.assert_array_equal(aug[k * len(x):(k + 1) * len(x), rest], x[:, rest])
+def _torch_logits(model: CellModel, x: np.ndarray) -> np.ndarray:
+    """The reference: the same weights in torch's own layers."""
+    import torch
+    from torch import nn
+
+    convs = [nn.Conv2d(k.shape[1], k.shape[0], 3, padding=1) for k in (model.k1, model.k2, model.k3)]
+    lin1, lin2 = nn.Linear(*model.w4.shape), nn.Linear(*model.w5.shape)
+    with torch.no_grad():
+        for conv, k, b in zip(convs, (model.k1, model.k2, model.k3), (model.b1, model.b2, model.b3)):
+            conv.weight.copy_(torch.from_numpy(k))
+            conv.bias.copy_(torch.from_numpy(b))
+        for lin, w, b in ((lin1, model.w4, model.b4), (lin2, model.w5, model.b5)):
+            lin.weight.copy_(torch.from_numpy(w.T.copy()))
+            lin.bias.copy_(torch.from_numpy(b))
+        views = (channels(x) - model.cmean[:, None, None]) / model.cscale[:, None, None]
+        a = torch.from_numpy(views.astype(np.float32))
+        for conv in convs:
+            a = nn.functional.max_pool2d(torch.relu(conv(a)), 2)
+        v = torch.from_numpy((x[:, WIN * WIN:] - model.smean) / model.sscale)
+        return lin2(torch.relu(lin1(torch.cat([a.flatten(1), v], dim=1)))).numpy()
+
+
+def test_the_numpy_network_computes_what_torchs_layers_compute() -> None:
+    """Reading runs the network in numpy (im2col convolutions, channels last); torch's own
+    convolution, pooling and linear layers with the same weights are the reference."""
+    x, y = _inputs(np.random.default_rng(2), 3)
+    model = fit(x, y, hidden=12, epochs=1, convs=(4, 6, 8), progress=False)
+    np.testing.assert_allclose(model.logits(x), _torch_logits(model, x), rtol=1e-4, atol=1e-4)
 
 
 def test_fit_learns_x_from_o_and_is_reproducible() -> None:
     rng = np.random.default_rng(3)
     x, y = _inputs(rng, 60)
     xt, yt = _inputs(rng, 20)
-    model = fit(x, y, hidden=16, epochs=8, progress=False)
+    model = fit(x, y, hidden=16, epochs=8, convs=(4, 8, 8), progress=False)
     assert (model.probs(xt).argmax(axis=1) == yt).mean() >= 0.95
-    again = fit(x, y, hidden=16, epochs=8, progress=False)
-    np.testing.assert_array_equal(model.w1, again.w1)
+    again = fit(x, y, hidden=16, epochs=8, convs=(4, 8, 8), progress=False)
+    np.testing.assert_array_equal(model.k1, again.k1)
+    np.testing.assert_array_equal(model.w5, again.w5)
     model.temperature = fit_temperature(model, xt, yt)
     assert 0.25 <= model.temperature <= 8.0
     assert expected_calibration_error(model.probs(xt), yt) < 0.1
@@ -122,7 +147,7 @@ def test_collected_cells_are_kept_and_reused(tmp_path: Path, monkeypatch: pytest
 
 def test_a_model_file_round_trips_and_bad_files_are_named(tmp_path: Path) -> None:
     x, y = _inputs(np.random.default_rng(4), 10)
-    model = fit(x, y, hidden=8, epochs=1, progress=False)
+    model = fit(x, y, hidden=8, epochs=1, convs=(4, 4, 4), progress=False)
     model.temperature, model.info = 1.7, '{"note": "test"}'
     path = tmp_path / "m.npz"
     path.write_bytes(model.to_bytes())
@@ -132,8 +157,13 @@ def test_a_model_file_round_trips_and_bad_files_are_named(tmp_path: Path) -> Non
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(VisionError, match="junk.npz"):
         CellModel.load(tmp_path / "junk.npz")
-    np.savez(tmp_path / "part.npz", w1=model.w1)
-    with pytest.raises(VisionError, match="lacks mean"):
+    arrays = {key: getattr(model, key) for key in ("cmean", "cscale", "smean", "sscale", "k1", "b1", "k2", "b2", "k3",
+                                                   "b3", "w4", "b4", "w5", "b5")}
+    np.savez(tmp_path / "shapes.npz", **{**arrays, "w4": arrays["w4"][1:]}, temperature=1.0, rule_weight=0.3, info="{}")
+    with pytest.raises(VisionError, match="shapes.npz: cell model with w4"):
+        CellModel.load(tmp_path / "shapes.npz")
+    np.savez(tmp_path / "part.npz", k1=model.k1)
+    with pytest.raises(VisionError, match="lacks cmean"):
         CellModel.load(tmp_path / "part.npz")
     with pytest.raises(VisionError, match="cell_px=30"):
         BoardReader(cell_px=30)
@@ -144,14 +174,18 @@ def test_the_training_entry_point_writes_a_model_the_reader_uses(tmp_path: Path,
                                                                  capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "cells.npz"
     assert main(["--real-like", "10", "--hard", "4", "--workers", "1", "--epochs", "2", "--hidden", "8",
-                 "--out", str(out)]) == 0
+                 "--convs", "4,4,8", "--out", str(out)]) == 0
     report = CellModel.load(out).describe()
     assert report["photos"] == 14 and report["cells_train"] > 0 and "held_out_accuracy" in report
+    assert report["convs"] == [4, 4, 8] and CellModel.load(out).k3.shape == (8, 4, 3, 3)
     assert "wrote" in capsys.readouterr().out
     sc = real_like_scene(1_000_000)
     assert BoardReader(size=3, model=str(out)).read(sc.image).cells.shape == (3, 3)
     with pytest.raises(SystemExit):
         main(["--hard", "-1"])
+    with pytest.raises(SystemExit):
+        main(["--convs", "4,4"])
+    assert "--convs 4,4; expected three channel counts" in capsys.readouterr().err
 
 
 def test_the_shipped_model_beats_the_rule_on_unseen_real_like_photos() -> None:

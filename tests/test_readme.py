@@ -19,7 +19,7 @@ PAGES = [ROOT / "README.md", ROOT / "bench" / "README.md", ROOT / "kinegym" / "d
 #: shell examples not run here, and why (each runs elsewhere or needs what a test has not)
 NOT_RUN = {
     "python -m kinegym.zoo": "RL Zoo trains and plays in tests/test_zoo.py, with fewer steps",
-    "python -m kinegym.agents.train_cells": "13 min; tests/test_cell_model.py trains through the same entry point "
+    "python -m kinegym.agents.train_cells": "23 min; tests/test_cell_model.py trains through the same entry point "
                                             "on 14 photos",
     "kinegym sensor-study --wall seed_4x4 --sigmas 0.1,0.25,0.5,1 --trials 2000": "minutes; test_cli runs a small one",
     "kinegym read-board photo.jpg": "the user's own photo; test_cli reads a rendered one",

@@ -28,10 +28,10 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    ghosts of erased games fall below it), and two shape features that do not depend on
    the symbol's rotation, size or placement in the cell - ink at the centre of the mark
    (an X crosses there, an O is hollow) and an enclosed hole (an O encloses one, an X
-   does not). A logistic rule turns them into probabilities; a small trained network
-   (:mod:`~kinegym.vision.cell_model`, shipped with the package) reads the cell's pooled ink
-   and those features and gives the calibrated probabilities the reader returns (``model=None``
-   keeps the rule's).
+   does not). A logistic rule turns them into probabilities; a small trained convolutional
+   network (:mod:`~kinegym.vision.cell_model`, shipped with the package, run in numpy) reads
+   the cell's window of ink and those features and gives the calibrated probabilities the
+   reader returns (``model=None`` keeps the rule's).
 
 **Hand-drawn grids.** When no field of straight lines shows (a real person's '#': wavy,
 converging lines, no frame, one line stopping at a crossing, pale or coloured pen), the grid

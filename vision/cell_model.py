@@ -1,56 +1,61 @@
-"""The learned cell classifier: a small two-layer perceptron, numpy only, shipped in the package
-(``vision/data/cell_model.npz``), that turns what the reader sees of one cell into calibrated
-empty / X / O probabilities.
+"""The learned cell classifier: a small convolutional network, run in numpy, shipped in the
+package (``vision/data/cell_model.npz``), that turns what the reader sees of one cell into
+calibrated empty / X / O probabilities.
 
 What it sees of a cell (:func:`cell_inputs`, one row per cell):
 
-* the cell and a quarter cell around it (an outer cell of a hand-drawn grid: as far out as
-  its mark may lie), from the rectified ink map with the grid lines removed, pooled to
-  10 x 10 three times: the mean (how much ink) and the max (where a thin pen runs) over the
-  grid lines' own darkness, clipped to 0..2, so a faint pen on a faint grid looks like a dark
-  pen on a dark grid; and the max over the window's own darkest ink - the mark's shape
-  whatever its darkness (a pale X beside black lines is still an X);
+* the window: the cell and a quarter cell around it (an outer cell of a hand-drawn grid: as
+  far out as its mark may lie), from the rectified ink map with the grid lines removed,
+  resized to ``WIN`` x ``WIN`` (area means), its darkness over the grid lines' own darkness,
+  clipped to 0..2 - so a faint pen on a faint grid looks like a dark pen on a dark grid;
 * the seven hand features of :func:`~kinegym.vision.cells.board_features` (peak over the
   lines' darkness, ink, hollow, hole, extent, elongation, spread);
-* the hand rule's three probabilities (:func:`~kinegym.vision.cells._probabilities`), which
-  the network corrects rather than replaces;
+* the hand rule's three probabilities (:func:`~kinegym.vision.cells._probabilities`);
 * the lines' darkness itself.
 
-The network: standardised inputs, one hidden layer of ReLU units, three logits over a
-temperature fitted on held-out scenes (so a confidence of 0.9 is right about nine times in
-ten), plus a small weight times the hand rule's log-probabilities - a prior that keeps the
-rule's say where the network, which has seen rendered photos only, is unsure (on the real dev
-photos that prior turns 133/135 cells right into 135/135), then a softmax.
-:mod:`kinegym.agents.train_cells` trains it on the rendered real-like and hard sets; the file
-records how (``info``).
+The network (:meth:`CellModel.logits`): three views of the window (:func:`channels`) - the
+darkness as it is, its square root (a pale pen's strokes stand out of the paper's noise) and
+over the window's own darkest ink (the mark's shape whatever its darkness: a pale X beside
+black lines is still an X) - go through three stages of a 3 x 3 convolution, ReLU and 2 x 2
+max-pooling; what comes out, with the standardised hand features, goes through one hidden
+ReLU layer to three logits. Those are divided by a temperature fitted on held-out photos (a
+confidence of 0.9 is right about nine times in ten), a small weight times the hand rule's
+log-probabilities is added - a prior that keeps the rule's say where the network, which has
+seen rendered photos only, is unsure - and a softmax gives the probabilities.
+:mod:`kinegym.agents.train_cells` trains it (in torch) on the rendered real-like and hard sets;
+reading needs numpy only. The file records how it was trained (``info``).
 """
 
 from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from kinegym.configs.io import read_bytes
 
 from .errors import VisionError
 
-__all__ = ["POOL", "CROPS", "N_INPUTS", "CellModel", "cell_inputs", "rule_probs", "dihedral", "SHIPPED_MODEL"]
+__all__ = ["WIN", "N_SCALARS", "N_INPUTS", "CellModel", "cell_inputs", "channels", "rule_probs", "SHIPPED_MODEL"]
 
-#: side of the pooled crop
-POOL = 10
-#: pooled crops per cell: mean and max of the ink over the lines' darkness, max over the cell's own darkest
-CROPS = 3
-#: inputs per cell: the pooled crops, 7 features, 3 rule probabilities, the line darkness
-N_INPUTS = CROPS * POOL * POOL + 7 + 3 + 1
-_RULE = CROPS * POOL * POOL + 7  # where the rule's probabilities start
+#: side of a cell's window (px) as the network sees it
+WIN = 32
+#: inputs per cell besides the window: 7 hand features, 3 rule probabilities, the line darkness
+N_SCALARS = 7 + 3 + 1
+#: inputs per cell: the window, then the scalars
+N_INPUTS = WIN * WIN + N_SCALARS
+_RULE = WIN * WIN + 7  # where the rule's probabilities start
+#: views of the window the network sees (:func:`channels`)
+N_CHANNELS = 3
 #: the model the reader uses by default
 SHIPPED_MODEL = Path(__file__).with_name("data") / "cell_model.npz"
 _MAX_BYTES = 8 << 20
+_ARRAYS = ("cmean", "cscale", "smean", "sscale", "k1", "b1", "k2", "b2", "k3", "b3", "w4", "b4", "w5", "b5")
 
 
 def cell_inputs(rect: np.ndarray, n: int, s: int, o: int, feats: np.ndarray, rule: np.ndarray,
@@ -66,26 +71,27 @@ def cell_inputs(rect: np.ndarray, n: int, s: int, o: int, feats: np.ndarray, rul
     m = s // 4
     ext = max(m, int(round(outer * s)))
     padded = np.pad(rect, ext)
-    side = POOL * (-(-(s + 2 * m) // POOL))  # every window is resized to this, then pooled
-    k = side // POOL
     lo = [ext if i == 0 else m for i in range(n)]
     hi = [ext if i == n - 1 else m for i in range(n)]
-    wins = np.empty((n * n, side, side), np.float32)
+    wins = np.empty((n * n, WIN, WIN), np.float32)
     for r in range(n):
         for c in range(n):
             y0, x0 = ext + o + r * s - lo[r], ext + o + c * s - lo[c]  # in ``padded``
             win = padded[y0:y0 + s + lo[r] + hi[r], x0:x0 + s + lo[c] + hi[c]]
-            wins[r * n + c] = win if win.shape == (side, side) else cv2.resize(win, (side, side),
-                                                                               interpolation=cv2.INTER_AREA)
-    wins = np.minimum(wins / ref, 2.0)
-    own = wins / np.maximum(wins.max(axis=(1, 2), keepdims=True), 0.05)  # the shape, whatever the darkness
-    wins, own = wins.reshape(n * n, POOL, k, POOL, k), own.reshape(n * n, POOL, k, POOL, k)
+            wins[r * n + c] = cv2.resize(win, (WIN, WIN), interpolation=cv2.INTER_AREA)
     f = feats.reshape(n * n, 7)
     hand = np.stack([f[:, 0] / ref, f[:, 1], f[:, 2], f[:, 3], f[:, 4], np.minimum(f[:, 5], 10.0) / 10.0,
                      f[:, 6]], axis=1)
-    return np.concatenate([wins.mean(axis=(2, 4)).reshape(n * n, -1), wins.max(axis=(2, 4)).reshape(n * n, -1),
-                           own.max(axis=(2, 4)).reshape(n * n, -1), np.minimum(hand, 4.0), rule.reshape(n * n, 3),
-                           np.full((n * n, 1), ref)], axis=1).astype(np.float32)
+    return np.concatenate([np.clip(wins / ref, 0.0, 2.0).reshape(n * n, -1), np.minimum(hand, 4.0),
+                           rule.reshape(n * n, 3), np.full((n * n, 1), ref)], axis=1).astype(np.float32)
+
+
+def channels(x: np.ndarray) -> np.ndarray:
+    """``(N, N_CHANNELS, WIN, WIN)`` float32: the three views of each row's window (module
+    docstring) - darkness over the lines', its square root, and over the window's darkest."""
+    w = np.asarray(x, np.float32)[:, :WIN * WIN].reshape(-1, WIN, WIN)
+    own = w / np.maximum(w.max(axis=(1, 2), keepdims=True), 0.05)
+    return np.stack([w, np.sqrt(w), own], axis=1)
 
 
 def rule_probs(x: np.ndarray) -> np.ndarray:
@@ -93,47 +99,69 @@ def rule_probs(x: np.ndarray) -> np.ndarray:
     return np.asarray(x, np.float64)[:, _RULE:_RULE + 3]
 
 
-def dihedral(x: np.ndarray) -> np.ndarray:
-    """The 8 rotations and mirror images of each row's crops (the other inputs unchanged):
-    ``(8 * N, N_INPUTS)``. An X turned or mirrored is still an X; so is an O."""
-    crops = x[:, :CROPS * POOL * POOL].reshape(-1, CROPS, POOL, POOL)
-    rest = x[:, CROPS * POOL * POOL:]
-    out = []
-    for flip in (False, True):
-        c = crops[..., ::-1] if flip else crops
-        for turn in range(4):
-            out.append(np.concatenate([np.rot90(c, turn, axes=(2, 3)).reshape(len(x), -1), rest], axis=1))
-    return np.concatenate(out, axis=0)
+def _conv_relu_pool(a: np.ndarray, k: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """One stage on channels-first-then-cells ``a`` ``(C, N, H, W)``: a 3 x 3 convolution padded
+    by 1 with kernels ``k`` ``(O, C, 3, 3)`` (torch's layout), ReLU, 2 x 2 max-pooling:
+    ``(O, N, H / 2, W / 2)``.
+
+    The convolution is one matrix product over the unfolded windows, whose columns are laid
+    out by pooling phase, so the pooling is a maximum of four contiguous blocks; the bias and
+    ReLU come after it (both rise monotonically, so they commute with the maximum exactly)."""
+    c, nb, h, w = a.shape
+    p = np.pad(a, ((0, 0), (0, 0), (1, 1), (1, 1)))
+    win = sliding_window_view(p, (3, 3), axis=(2, 3)).reshape(c, nb, h // 2, 2, w // 2, 2, 3, 3)
+    cols = win.transpose(0, 6, 7, 3, 5, 1, 2, 4).reshape(c * 9, 4 * nb * (h // 2) * (w // 2))
+    out = (k.reshape(len(k), c * 9) @ cols).reshape(len(k), 4, -1)
+    pooled = np.maximum(np.maximum(out[:, 0], out[:, 1]), np.maximum(out[:, 2], out[:, 3]))
+    pooled += b[:, None]
+    np.maximum(pooled, 0.0, out=pooled)
+    return pooled.reshape(len(k), nb, h // 2, w // 2)
 
 
 @dataclass
 class CellModel:
-    """Weights of the classifier (see the module docstring).
+    """Weights of the classifier (see the module docstring); torch's layouts.
 
     Attributes:
-        mean, scale: ``(N_INPUTS,)`` input standardisation.
-        w1, b1: ``(N_INPUTS, H)``, ``(H,)`` hidden layer (ReLU).
-        w2, b2: ``(H, 3)``, ``(3,)`` output logits (empty, X, O).
+        cmean, cscale: ``(N_CHANNELS,)`` standardisation of the window's views.
+        smean, sscale: ``(N_SCALARS,)`` standardisation of the scalar inputs.
+        k1, b1, k2, b2, k3, b3: the three convolutions ``(O, C, 3, 3)``, ``(O,)``.
+        w4, b4: ``(k3 channels * (WIN / 8) ** 2 + N_SCALARS, H)``, ``(H,)`` the hidden layer.
+        w5, b5: ``(H, 3)``, ``(3,)`` the logits (empty, X, O).
         temperature: the logits are divided by it before the softmax (calibration).
         rule_weight: how much the hand rule's own log-probabilities add to the logits (a weak
             prior: the rule was set on real photos, the network learnt on rendered ones).
         info: how the model was trained (a JSON object).
     """
 
-    mean: np.ndarray
-    scale: np.ndarray
-    w1: np.ndarray
+    cmean: np.ndarray
+    cscale: np.ndarray
+    smean: np.ndarray
+    sscale: np.ndarray
+    k1: np.ndarray
     b1: np.ndarray
-    w2: np.ndarray
+    k2: np.ndarray
     b2: np.ndarray
+    k3: np.ndarray
+    b3: np.ndarray
+    w4: np.ndarray
+    b4: np.ndarray
+    w5: np.ndarray
+    b5: np.ndarray
     temperature: float = 1.0
     rule_weight: float = 0.0
-    info: str = "{}"
+    info: str = field(default="{}")
 
     def logits(self, x: np.ndarray) -> np.ndarray:
         """``(N, 3)`` logits before the temperature."""
-        h = np.maximum(((np.asarray(x, np.float32) - self.mean) / self.scale) @ self.w1 + self.b1, 0.0)
-        return h @ self.w2 + self.b2
+        x = np.asarray(x, np.float32)
+        a = ((channels(x) - self.cmean[:, None, None]) / self.cscale[:, None, None]).transpose(1, 0, 2, 3)
+        for k, b in ((self.k1, self.b1), (self.k2, self.b2), (self.k3, self.b3)):
+            a = _conv_relu_pool(a, k, b)
+        flat = a.transpose(1, 0, 2, 3).reshape(len(x), -1)  # each cell's (C, H, W), as torch flattens
+        scalars = (x[:, WIN * WIN:] - self.smean) / self.sscale
+        h = np.maximum(np.concatenate([flat, scalars], axis=1) @ self.w4 + self.b4, 0.0)
+        return h @ self.w5 + self.b5
 
     def probs(self, x: np.ndarray) -> np.ndarray:
         """``(N, 3)`` calibrated probabilities of empty / X / O."""
@@ -144,9 +172,8 @@ class CellModel:
 
     def to_bytes(self) -> bytes:
         buf = io.BytesIO()
-        np.savez(buf, mean=self.mean, scale=self.scale, w1=self.w1, b1=self.b1, w2=self.w2, b2=self.b2,
-                 temperature=np.float64(self.temperature), rule_weight=np.float64(self.rule_weight),
-                 info=np.array(self.info))
+        np.savez(buf, **{key: getattr(self, key) for key in _ARRAYS}, temperature=np.float64(self.temperature),
+                 rule_weight=np.float64(self.rule_weight), info=np.array(self.info))
         return buf.getvalue()
 
     @classmethod
@@ -158,22 +185,40 @@ class CellModel:
                 arrays = {key: z[key] for key in z.files}
         except (ValueError, OSError, EOFError) as err:
             raise VisionError(f"{path}: not a cell model ({err}); expected an .npz saved by CellModel") from None
-        need = ("mean", "scale", "w1", "b1", "w2", "b2", "temperature", "rule_weight", "info")
+        need = (*_ARRAYS, "temperature", "rule_weight", "info")
         missing = [key for key in need if key not in arrays]
         if missing:
-            raise VisionError(f"{path}: cell model lacks {', '.join(missing)}; expected the arrays {', '.join(need)}")
-        w1, w2 = arrays["w1"], arrays["w2"]
-        hidden = w1.shape[1] if w1.ndim == 2 else -1
-        shapes_ok = (w1.shape == (N_INPUTS, hidden) and arrays["b1"].shape == (hidden,) and w2.shape == (hidden, 3)
-                     and arrays["b2"].shape == (3,) and arrays["mean"].shape == arrays["scale"].shape == (N_INPUTS,))
+            raise VisionError(f"{path}: cell model lacks {', '.join(missing)}; expected the arrays {', '.join(need)} "
+                              "(a model of an older reader? retrain it with python -m kinegym.agents.train_cells)")
+        f32 = {key: np.asarray(arrays[key], np.float32) for key in _ARRAYS}
         temperature, rule_weight = float(arrays["temperature"]), float(arrays["rule_weight"])
-        if not shapes_ok or not 0 < temperature < np.inf or not 0 <= rule_weight <= 10:
-            raise VisionError(f"{path}: cell model of shapes w1 {w1.shape}, w2 {w2.shape}, temperature {temperature}, "
-                              f"rule weight {rule_weight}; expected w1 ({N_INPUTS}, H), w2 (H, 3), a positive "
-                              "temperature and a rule weight in 0..10")
-        f32 = {key: np.asarray(arrays[key], np.float32) for key in need[:6]}
+        problem = _shape_problem(f32)
+        if problem or not 0 < temperature < np.inf or not 0 <= rule_weight <= 10:
+            raise VisionError(f"{path}: cell model with {problem or 'consistent shapes'}, temperature {temperature}, "
+                              f"rule weight {rule_weight}; expected three 3 x 3 convolutions from {N_CHANNELS} "
+                              f"channels, a hidden layer over their {WIN // 8} x {WIN // 8} output and "
+                              f"{N_SCALARS} scalars, 3 logits, a positive temperature and a rule weight in 0..10")
         return cls(**f32, temperature=temperature, rule_weight=rule_weight, info=str(arrays["info"]))
 
     def describe(self) -> dict[str, object]:
         """The training record stored with the model."""
         return dict(json.loads(self.info))
+
+
+def _shape_problem(a: dict[str, np.ndarray]) -> str:
+    """What is inconsistent in a model's arrays (``""`` when nothing)."""
+    c_in = N_CHANNELS
+    for i in (1, 2, 3):
+        k, b = a[f"k{i}"], a[f"b{i}"]
+        if k.ndim != 4 or k.shape[1:] != (c_in, 3, 3) or b.shape != (k.shape[0],):
+            return f"k{i} {k.shape} and b{i} {b.shape} after {c_in} channels"
+        c_in = k.shape[0]
+    w4, b4, w5, b5 = a["w4"], a["b4"], a["w5"], a["b5"]
+    flat = c_in * (WIN // 8) ** 2 + N_SCALARS
+    if w4.ndim != 2 or w4.shape[0] != flat or b4.shape != (w4.shape[1],) or w5.shape != (w4.shape[1], 3) \
+            or b5.shape != (3,):
+        return f"w4 {w4.shape}, b4 {b4.shape}, w5 {w5.shape}, b5 {b5.shape} after {flat} inputs"
+    if any(a[key].shape != (N_CHANNELS,) for key in ("cmean", "cscale")) \
+            or any(a[key].shape != (N_SCALARS,) for key in ("smean", "sscale")):
+        return f"standardisation of shapes {a['cmean'].shape}, {a['smean'].shape}"
+    return ""
