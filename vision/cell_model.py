@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -41,7 +41,8 @@ from kinegym.configs.io import read_bytes
 
 from .errors import VisionError
 
-__all__ = ["WIN", "N_SCALARS", "N_INPUTS", "CellModel", "cell_inputs", "channels", "rule_probs", "SHIPPED_MODEL"]
+__all__ = ["WIN", "N_CHANNELS", "N_SCALARS", "N_INPUTS", "CellModel", "cell_inputs", "channels", "rule_probs",
+           "SHIPPED_MODEL"]
 
 #: side of a cell's window (px) as the network sees it
 WIN = 32
@@ -150,7 +151,7 @@ class CellModel:
     b5: np.ndarray
     temperature: float = 1.0
     rule_weight: float = 0.0
-    info: str = field(default="{}")
+    info: str = "{}"
 
     def logits(self, x: np.ndarray) -> np.ndarray:
         """``(N, 3)`` logits before the temperature."""
