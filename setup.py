@@ -26,7 +26,7 @@ setup(
     package_data={
         "kinegym.configs": ["**/*.yaml"],
         "kinegym.agents": ["data/*.npz"],
-        "kinegym.vision": ["data/*.npz"],
+        "kinegym.vision": ["data/*.npz", "data/*.json"],
         "kinegym.zoo": ["*.yml"],
     },
     exclude_package_data={"kinegym": ["assets/*"]},

@@ -3,7 +3,8 @@
 
 Called by ``.ci/run`` as ``python wheel_smoke.py`` from that folder. Exits non-zero (with the
 reason) when the user's packages shadow ours or ours shadow theirs, an environment cannot be
-made, reset and stepped, the opening book or the reader's cell model is missing from the wheel, or the CLI fails.
+made, reset and stepped, the opening book or the reader's cell model or grid arbiter is missing
+from the wheel, or the CLI fails.
 """
 
 from __future__ import annotations
@@ -63,9 +64,11 @@ from kinegym.envs.sim.scenes import random_scene  # noqa: E402
 from kinegym.vision.board_reader import BoardReader  # noqa: E402
 
 scene = random_scene(7, n=3, difficulty="default")
-read = BoardReader(size=3).read(scene.photo.image)  # loads the trained cell model shipped in the wheel
+reader = BoardReader(size=3)  # loads the trained cell model and grid arbiter shipped in the wheel
+assert reader.model is not None and reader.arbiter is not None
+read = reader.read(scene.photo.image)
 assert (read.cells == scene.cells).all(), f"the wheel's reader misread a lab board: {read.text()}"
-print(f"board reader with the shipped cell model: read {read.text()}")
+print(f"board reader with the shipped cell model and grid arbiter: read {read.text()}")
 
 out = subprocess.run([str(exe), "--help"], capture_output=True, text=True, timeout=60)
 assert out.returncode == 0 and "demo" in out.stdout, f"kinegym --help failed: {out.stderr}"

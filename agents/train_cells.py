@@ -1,8 +1,9 @@
 """Train the board reader's cell classifier (:mod:`kinegym.vision.cell_model`) on rendered photos.
 
 ``python -m kinegym.agents.train_cells --out vision/data/cell_model.npz`` renders photos, reads
-each with the hand rule, and keeps the cells of every board whose grid was found right (each
-true cell centre falls in its own cell; the classifier cannot mend a wrong grid). It then:
+each with the hand rule (and the first grid found: the grid arbiter is trained on this model's
+calls, not before it), and keeps the cells of every board whose grid was found right (each true
+cell centre falls in its own cell; the classifier cannot mend a wrong grid). It then:
 
 1. splits the photos (never the cells of one photo) into training and held-out parts;
 2. fits the network in torch (one thread) by AdamW on the training cells, each batch's windows
@@ -29,9 +30,10 @@ import json
 import multiprocessing as mp
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -53,6 +55,7 @@ __all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "ex
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
 #: channels of the network's three convolutions
 CONVS = (16, 32, 64)
+J, R = TypeVar("J"), TypeVar("R")
 _MAX_CACHE_BYTES = 2 << 30  # 100,000 photos' cells, compressed, stay well under this
 
 
@@ -67,6 +70,21 @@ class _Ticker:
         if self.enabled and (self.done * 10 // self.total > (self.done - 1) * 10 // self.total):
             print(f"  {self.what}: {self.done}/{self.total}, {time.perf_counter() - self.t0:.0f} s", file=sys.stderr,
                   flush=True)
+
+
+def in_order(fn: Callable[[J], R], jobs: Sequence[J], workers: int, bar: _Ticker) -> list[R]:
+    """``fn`` of every job, in the jobs' order, in ``workers`` spawned processes (1: here)."""
+    out: list[R] = []
+    if workers > 1:
+        with mp.get_context("spawn").Pool(workers) as pool:
+            for res in pool.imap(fn, jobs, chunksize=4):
+                out.append(res)
+                bar.update()
+    else:
+        for job in jobs:
+            out.append(fn(job))
+            bar.update()
+    return out
 
 
 @dataclass
@@ -102,7 +120,7 @@ def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
         truth, image = hs.cells, hs.photo.image
     trace: dict[str, object] = {}
     try:
-        reading = BoardReader(size=n, model=None).read(image, trace)
+        reading = BoardReader(size=n, model=None, arbiter=None).read(image, trace)
     except NoBoardError:
         return None
     if not grid_is_right(reading.homography, centres, n):
@@ -126,17 +144,7 @@ def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) 
     jobs = [("real-like", REAL_LIKE_SEED + i) for i in range(real_like)] + [("hard", HARD_SEED + i)
                                                                            for i in range(hard)]
     xs, ys, ids = [], [], []
-    bar = _Ticker(len(jobs), "photos", progress)
-    results = []
-    if workers > 1:
-        with mp.get_context("spawn").Pool(workers) as pool:
-            for res in pool.imap(_scene_cells, jobs, chunksize=4):
-                results.append(res)
-                bar.update()
-    else:
-        for job in jobs:
-            results.append(_scene_cells(job))
-            bar.update()
+    results = in_order(_scene_cells, jobs, workers, _Ticker(len(jobs), "photos", progress))
     for k, res in enumerate(results):
         if res is not None:
             xs.append(res[0])

@@ -125,20 +125,21 @@ def real_like(count: int) -> None:
         except NoBoardError:
             got = rule = None
         dt = (time.perf_counter() - t0) * 1e3
+        made = len(trace.get("hypotheses", []))  # type: ignore[arg-type]
         w = int(sc.notes["width"])
         for key in (f"{sc.notes['surface']}", "all", "width <= 960" if w <= 960 else "width 1,280-2,048"
                     if w <= 2048 else "width 3,000-4,000"):
-            rows.setdefault(key, []).append((got, sc.cells, dt, rule))
+            rows.setdefault(key, []).append((got, sc.cells, dt, rule, made))
     print(f"\n{count} real-like photos (3 x 3, seeds 20,000 on)")
     print("| real-like | photos | cells right | boards right | X vs O right | refused | ms per frame median / p95 "
-          "| hand rule alone: cells / boards |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| hand rule alone: cells / boards | grids read per photo |")
+    print("|---|---|---|---|---|---|---|---|---|")
     order = ("paper", "whiteboard", "graph", "notebook", "width <= 960", "width 1,280-2,048", "width 3,000-4,000",
              "all")
     for key in [k for k in order if k in rows]:
         res = rows[key]
         cells = boards = both = xo = refused = rule_cells = rule_boards = 0
-        for got, truth, _, rule in res:
+        for got, truth, _, rule, _ in res:
             if got is None:
                 refused += 1
                 continue
@@ -150,7 +151,8 @@ def real_like(count: int) -> None:
         t = np.array([r[2] for r in res])
         print(f"| {key} | {len(res)} | {cells / (9 * len(res)):.1%} | {boards / len(res):.1%} | "
               f"{xo / max(both, 1):.1%} | {refused} | {np.median(t):.1f} / {np.percentile(t, 95):.1f} | "
-              f"{rule_cells / (9 * len(res)):.1%} / {rule_boards / len(res):.1%} |", flush=True)
+              f"{rule_cells / (9 * len(res)):.1%} / {rule_boards / len(res):.1%} | "
+              f"{np.mean([r[4] for r in res]):.2f} |", flush=True)
 
 
 def real_photos(repeat: int = 1) -> None:

@@ -50,12 +50,13 @@ def washed_out(img: np.ndarray, contrast: float) -> np.ndarray:
 
 def test_a_pale_pen_is_ink_too() -> None:
     """The photos washed out: at 60 % of their contrast every board reads; at 45 % (the
-    strongest strokes about 0.11 darker than the board, as pale as ballpoint) 13 of 15 do
-    (measured with the convolutional cell classifier: image7's top-right X is lost and the empty
-    image12 gets a false X; the perceptron before it lost only image7's crossed-out O)."""
+    strongest strokes about 0.11 darker than the board, as pale as ballpoint) 14 of 15 do
+    (the empty image12 gets a false X). With the first grid found, 13: at 45 % image7's '#'
+    traced at 22 % of the strongest ink loses its top-right X, and the grid arbiter takes the
+    one traced at 45 %; at 60 % it turns down the 45 % grid, bent onto an O and an X stroke."""
     right = {c: sum(matches(BoardReader().read(washed_out(read_image(DATA / name), c)).text(), label)
                     for name, label in LABELS.items()) for c in (0.6, 0.45)}
-    assert right[0.6] == len(LABELS) and right[0.45] >= len(LABELS) - 2, right
+    assert right[0.6] == len(LABELS) and right[0.45] >= len(LABELS) - 1, right
 
 
 def test_a_grid_cut_off_by_the_frame_edge() -> None:

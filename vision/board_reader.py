@@ -33,17 +33,21 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    the cell's window of ink and those features and gives the calibrated probabilities the
    reader returns (``model=None`` keeps the rule's).
 
-**Hand-drawn grids.** When no field of straight lines shows (a real person's '#': wavy,
-converging lines, no frame, one line stopping at a crossing, pale or coloured pen), the grid
-is looked for as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`: strokes traced as
-curves, four chosen by how a tic-tac-toe grid looks, found on a copy of the photo at one
-fixed scale whatever its size). Its traced lines are erased from the ink, a cell of the
-photo's px is max-pooled onto the rectified cell (a thin pen would alias into dots), the
-ink level is the photo's own (noise and strongest strokes, not a fixed floor), and a mark
-whose centre lies up to 0.9 of a cell past the crossings' lattice still belongs to its
-outer cell (real outer cells are larger than the middle one). Straight ruled fields are
-tried first: on rendered and lab boards that reader is exact, and the '#' path never
-overrides it.
+**Hand-drawn grids.** A real person's '#' (wavy, converging lines, no frame, one line
+stopping at a crossing, pale or coloured pen) is looked for as a hand-drawn '#'
+(:mod:`~kinegym.vision.hand_grid`: strokes traced as curves, four chosen by how a tic-tac-toe
+grid looks, found on a copy of the photo at one fixed scale whatever its size). Its traced
+lines are erased from the ink, a cell of the photo's px is max-pooled onto the rectified cell
+(a thin pen would alias into dots), the ink level is the photo's own (noise and strongest
+strokes, not a fixed floor), and a mark whose centre lies up to 0.9 of a cell past the
+crossings' lattice still belongs to its outer cell (real outer cells are larger than the
+middle one).
+
+**Choosing.** The straight field and the '#' at three ink thresholds are *hypotheses*
+(:mod:`~kinegym.vision.grid_choice`), made in that order, each with its cells read; a
+trained :class:`~kinegym.vision.grid_choice.GridArbiter` gives each the probability that it
+reads the board right. The first that reaches its accept level is taken, else the most
+probable made (on rendered and lab boards the straight field is taken at once).
 
 Rows are returned top to bottom and columns left to right *as the image shows them*
 (a board turned more than 45 degrees reads turned). :class:`ThresholdReader` keeps seed
@@ -56,6 +60,7 @@ No board in the image raises :class:`NoBoardError` (with the reason), never a gu
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import cv2
 import numpy as np
@@ -64,6 +69,7 @@ from .cell_model import SHIPPED_MODEL, CellModel, cell_inputs
 from .cells import _probabilities, _remove_grid_lines, board_features
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
+from .grid_choice import KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features, same_grid
 from .grid_lines import (
     _crossing,
     _crossings,
@@ -76,10 +82,10 @@ from .grid_lines import (
     _segments,
     _union_length,
 )
-from .hand_grid import erase_mask, find_hash_grid, search_copy
+from .hand_grid import search_copy
+from .hash_cells import _darkest_near, read_hash
 from .ink import _apply, _as_rgb, ink_colour, ink_map
 from .reading import EMPTY, BoardReading, O, X
-from .ruling import clear_rules
 from .threshold_reader import ThresholdReader
 
 __all__ = [
@@ -97,16 +103,6 @@ __all__ = [
 ]
 
 
-def _darkest_near(d: np.ndarray, px: np.ndarray) -> np.ndarray:
-    """The darkest value within 2 px of each point ``px`` ``(N, 2)`` (x, y) of the map ``d``:
-    a 5 x 5 dilation evaluated at those points only."""
-    h, w = d.shape
-    off = np.arange(-2, 3)
-    ys = np.clip(px[:, 1, None, None] + off[None, :, None], 0, h - 1)
-    xs = np.clip(px[:, 0, None, None] + off[None, None, :], 0, w - 1)
-    return d[ys, xs].max(axis=(1, 2))
-
-
 class BoardReader:
     """Finds the grid and reads every cell (see the module docstring).
 
@@ -117,10 +113,13 @@ class BoardReader:
         grid_px: the grid is searched on a copy shrunk to about this longer side.
         model: the cell classifier - a :class:`CellModel`, the path of one, ``"shipped"``
             (the package's) or None for the hand rule alone.
+        arbiter: what chooses among grid hypotheses - a :class:`GridArbiter`, the path of one,
+            ``"shipped"`` or None for the first grid found.
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
-                 grid_px: int = 400, model: CellModel | str | None = "shipped") -> None:
+                 grid_px: int = 400, model: CellModel | str | None = "shipped",
+                 arbiter: GridArbiter | str | None = "shipped") -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
@@ -137,14 +136,47 @@ class BoardReader:
                                   "(pass model=None for the hand rule at other sizes)")
             model = CellModel.load(SHIPPED_MODEL if model == "shipped" else model)
         self.model = model
+        if arbiter is not None and not isinstance(arbiter, GridArbiter):
+            arbiter = GridArbiter.load(SHIPPED_ARBITER if arbiter == "shipped" else arbiter)
+        self.arbiter = arbiter
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
 
         ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
         in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
-        :func:`debug_image`.
+        :func:`debug_image`, and ``trace["hypotheses"]``: each grid tried, (kind, probability).
         """
+        made, reasons = [], []
+        for hyp in self._hypotheses(image, reasons):
+            made.append(hyp)
+            if self.arbiter is None or hyp.p >= self.arbiter.accept:
+                break
+        if not made:
+            if trace is not None:
+                trace["hypotheses"] = []
+            raise NoBoardError("; ".join(reasons))
+        best = max(made, key=lambda h: h.p)
+        if trace is not None:
+            trace.update({key: v for key, v in best.trace.items() if not key.startswith("_")})
+            trace["hypotheses"] = [(h.kind, h.p) for h in made]
+        cells, conf = best.probs.argmax(axis=-1), best.probs.max(axis=-1)
+        scale = float(best.trace["_scale"])
+        H, err = best.H, best.err
+        if scale < 1.0:
+            H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
+            err /= scale
+        return BoardReading(cells.astype(np.int64), conf, best.probs, H, float(err), best.npts, best.frame, best.feats)
+
+    def hypotheses(self, image: object) -> list[Hypothesis]:
+        """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` that finds a grid
+        (the same grid once), its cells read and its arbiter probability ``p`` (1.0 without an
+        arbiter): what :meth:`read` chooses from, for training and inspecting the arbiter."""
+        return list(self._hypotheses(image, []))
+
+    def _hypotheses(self, image: object, reasons: list[str]) -> Iterator[Hypothesis]:
+        """The hypotheses, lazily, in :data:`KINDS` order; a kind that finds nothing adds its
+        reason to ``reasons``, one that finds a grid already made is passed over."""
         rgb = photo = _as_rgb(image)
         h0, w0 = rgb.shape[:2]
         scale = min(1.0, self.max_side_px / max(h0, w0))
@@ -153,78 +185,46 @@ class BoardReader:
         h, w = rgb.shape[:2]
         diag = math.hypot(h, w)
         d = ink_map(rgb, stroke_px=max(6.0, diag / 100))
-        # the grid is found on a copy of about grid_px (long lines need no more), the cells
-        # are read at full resolution
+        made: list[Hypothesis] = []
+        hashed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        for kind in KINDS:
+            sub: dict[str, object] = {}
+            try:
+                if kind == "straight":  # straight ruled lines (the lab's and the renderer's boards, frames)
+                    hyp = self._straight(d, diag, sub)
+                else:  # a hand-drawn '#': wavy, converging, unframed lines
+                    if hashed is None:
+                        small = search_copy(rgb, photo)
+                        stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
+                        hashed = (small, ink_map(small, stroke_px=stroke), ink_colour(small, stroke_px=stroke))
+                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind])
+            except NoBoardError as exc:
+                reasons.append(f"{'straight lines' if kind == 'straight' else kind}: {exc.reason}")
+                continue
+            if any(same_grid(hyp, m) for m in made):
+                continue
+            hyp.kind, hyp.diag, hyp.trace = kind, diag, sub
+            sub["_scale"] = scale
+            sub["scale"] = scale / float(sub.pop("_g", 1))  # type: ignore[arg-type]
+            if "hash_to_px" in sub:  # the '#' was read: its px to the image's
+                sub["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ sub["hash_to_px"]
+            hyp.p = 1.0 if self.arbiter is None else float(self.arbiter.prob(features(hyp)[None])[0])
+            made.append(hyp)
+            yield hyp
+
+    def _straight(self, d: np.ndarray, diag: float, trace: dict[str, object]) -> Hypothesis:
+        """The straight ruled field: found on a copy of about ``grid_px`` (long lines need no
+        more), the cells read at full resolution."""
+        h, w = d.shape
         g = max(1, int(round(max(h, w) / self.grid_px)))
         dg = cv2.resize(d, (w // g, h // g), interpolation=cv2.INTER_AREA) if g > 1 else d
-        if trace is not None:
-            trace["scale"] = scale / g
-        try:  # straight ruled lines first (the lab's and the renderer's boards, frames)
-            Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
-            H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
-            err *= g
-            line_ref, _ = self._line_contrast(d, H, n)
-            probs, feats, inputs = self._read_cells(d, H, n, line_ref)
-        except NoBoardError as straight:  # then a hand-drawn '#': wavy, converging, unframed lines
-            if trace is not None:  # the straight-line attempt's lines are not what was read
-                for key in ("lines", "cols", "rows", "lattice", "nodes", "extension"):
-                    trace.pop(key, None)
-            try:
-                H, err, npts, frame, n, probs, feats, inputs = self._read_hash(rgb, d, trace, photo)
-            except NoBoardError as hand:
-                raise NoBoardError(f"{straight.reason}; as a hand-drawn '#': {hand.reason}") from None
-        if trace is not None and "hash_to_px" in trace:  # the '#' was read: its px to the image's
-            trace["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ trace["hash_to_px"]
-        if trace is not None:
-            trace["cell_inputs"] = inputs
-        cells = probs.argmax(axis=-1)
-        conf = probs.max(axis=-1)
-        if scale < 1.0:
-            H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
-            err /= scale
-        return BoardReading(cells.astype(np.int64), conf, probs, H, float(err), npts, frame, feats)
-
-    # -- hand-drawn '#' -------------------------------------------------------------
-    def _read_hash(self, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object] | None,
-                   photo: np.ndarray | None = None
-                   ) -> tuple[np.ndarray, float, int, tuple[bool, bool, bool, bool], int, np.ndarray, np.ndarray,
-                              np.ndarray]:
-        """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found in
-        the ink of a copy of the photo :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its
-        longer side (the same scale whatever the camera;
-        :func:`~kinegym.vision.hand_grid.search_copy` makes it from the working copy ``rgb`` or,
-        at a whole factor, from the ``photo`` itself), its lines erased from the ink
-        ``d``, the cells read with the outer cells reaching past the field."""
-        h, w = d.shape
-        small = search_copy(rgb, photo)
-        stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
-        dg = ink_map(small, stroke_px=stroke)
-        sizes = (self.size,) if self.size is not None else (3, 5)
-        grid = find_hash_grid(dg, sizes, ink_colour(small, stroke_px=stroke))
-        fx, fy = w / dg.shape[1], h / dg.shape[0]
-        to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
-        H = to_d @ grid.H
-        erase = cv2.resize(erase_mask(grid, dg), (w, h), interpolation=cv2.INTER_NEAREST)
-        clean = d.copy()
-        clean[erase > 0] = 0.0
-        if grid.rules is not None:  # ruled paper: what is no darker than its rules, on a rule, is a rule
-            clear_rules(clean, d, rgb, grid.rules, grid.rule_hue, erase > 0)
-        # the contrast of real ink: the lines' darkness along their traces
-        pts = np.concatenate([tr.dense for tr in grid.cols + grid.rows]) @ to_d[:2, :2].T + to_d[:2, 2]
-        line_ref = max(float(np.median(_darkest_near(d, np.rint(pts).astype(np.intp)))), 1e-3)
-        floor = 0.6 * grid.threshold
-        if trace is not None:
-            trace["hash"] = grid
-            trace["hash_to_px"] = to_d
-        # a cell of the photo spans several rectified px: a thin pen would alias into dots
-        # there, so each px takes the darkest of the photo's px it stands for (a max filter)
-        step = float(np.median(np.hypot(*np.diff(grid.crossings, axis=0).reshape(-1, 2).T))) * fx
-        k = int(step / self.cell_px)
-        if k >= 2:
-            clean = cv2.dilate(clean, np.ones((k, k), np.uint8))
-        probs, feats, inputs = self._read_cells(clean, H, grid.n, line_ref, floor=floor, margin_cells=1.0, outer=0.9)
-        npts = int(grid.crossings.shape[0] * grid.crossings.shape[1])
-        return H, grid.error_px * fx, npts, (False, False, False, False), grid.n, probs, feats, inputs
+        trace["_g"] = g
+        Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
+        H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
+        line_ref, coverage = self._line_contrast(d, H, n)
+        probs, feats, inputs = self._read_cells(d, H, n, line_ref)
+        trace["cell_inputs"] = inputs
+        return Hypothesis("straight", H, err * g, npts, frame, n, probs, feats, inputs, line_ref, coverage, 0.0, diag)
 
     # -- grid ------------------------------------------------------------------------
     def _find_grid(self, d: np.ndarray, diag: float, trace: dict[str, object] | None = None

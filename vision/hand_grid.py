@@ -412,13 +412,18 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
     return best
 
 
-def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None) -> HashGrid:
+def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None,
+                   share: float | None = None) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
-    threshold is first 22 % of the strongest ink (:func:`ink_mask`); when that finds no '#',
-    all ink above the noise is searched (pale grid lines beside black marks). ``colour``, the
-    map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets the lines' pen count: one
-    '#' is drawn in one colour, and rules of another colour are not its lines."""
+    threshold is ``share`` of the strongest ink (:func:`ink_mask`); by default first 22 % and,
+    when that finds no '#', all ink above the noise (pale grid lines beside black marks).
+    ``colour``, the map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets the
+    lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines."""
+    if share is not None:
+        if not 0.0 <= share < 1.0:
+            raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
+        return _find_hash_grid(d, sizes, float(share), colour)
     try:
         return _find_hash_grid(d, sizes, 0.22, colour)
     except NoBoardError as first:
