@@ -87,7 +87,10 @@ def test_hypotheses_are_made_once_per_grid_and_traced() -> None:
     assert made and all(kind in KINDS and 0.0 <= p <= 1.0 for kind, p in made)  # type: ignore[union-attr]
     best = max(made, key=lambda kp: kp[1])  # type: ignore[arg-type, union-attr]
     assert reading.cells.shape == (3, 3) and trace["cell_inputs"] is not None
-    assert best[0] in [h.kind for h in hyps]
+    chosen = next(h for h in hyps if h.kind == best[0])  # the same grids, made by a reader without an arbiter
+    assert chosen.scale < 1.0  # a 1,280 px photo, read on an 800 px working copy
+    np.testing.assert_allclose(reading.homography, np.diag([1 / chosen.scale, 1 / chosen.scale, 1.0]) @ chosen.H)
+    np.testing.assert_array_equal(reading.cells, chosen.probs.argmax(-1))
 
 
 def test_no_grid_names_every_hypothesis_tried() -> None:
@@ -128,6 +131,9 @@ def test_the_training_entry_point_writes_an_arbiter_the_reader_uses(tmp_path: Pa
         assert BoardReader(size=3, arbiter=str(out)).read(sc.image).cells.shape == (3, 3)
     except NoBoardError:
         pass
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(FileError, match="bad.npz: not a hypotheses file"):
+        main(["--real-like", "2", "--hard", "0", "--workers", "1", "--data", str(tmp_path / "bad.npz")])
     with pytest.raises(SystemExit):
         main(["--l2", "-1"])
     assert "--l2 -1.0; expected 0..10" in capsys.readouterr().err

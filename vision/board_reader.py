@@ -158,11 +158,10 @@ class BoardReader:
             raise NoBoardError("; ".join(reasons))
         best = max(made, key=lambda h: h.p)
         if trace is not None:
-            trace.update({key: v for key, v in best.trace.items() if not key.startswith("_")})
+            trace.update(best.trace)
             trace["hypotheses"] = [(h.kind, h.p) for h in made]
         cells, conf = best.probs.argmax(axis=-1), best.probs.max(axis=-1)
-        scale = float(best.trace["_scale"])
-        H, err = best.H, best.err
+        scale, H, err = best.scale, best.H, best.err
         if scale < 1.0:
             H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
             err /= scale
@@ -203,8 +202,7 @@ class BoardReader:
                 continue
             if any(same_grid(hyp, m) for m in made):
                 continue
-            hyp.kind, hyp.diag, hyp.trace = kind, diag, sub
-            sub["_scale"] = scale
+            hyp.kind, hyp.diag, hyp.trace, hyp.scale = kind, diag, sub, scale
             sub["scale"] = scale / float(sub.pop("_g", 1))  # type: ignore[arg-type]
             if "hash_to_px" in sub:  # the '#' was read: its px to the image's
                 sub["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ sub["hash_to_px"]

@@ -70,7 +70,8 @@ class Hypothesis:
     classifier's), ``line_ref`` / ``coverage`` the grid lines' darkness and inked share,
     ``score`` the '#' search's score per crossing (0 for the straight field), ``diag`` the
     working image's diagonal (px), ``trace`` what the search recorded, ``p`` the arbiter's
-    probability (None before it was asked)."""
+    probability (None before it was asked), ``scale`` working px per photo px (``H`` in the
+    photo's px is ``diag(1 / scale, 1 / scale, 1) @ H``)."""
 
     kind: str
     H: np.ndarray
@@ -87,6 +88,7 @@ class Hypothesis:
     diag: float
     trace: dict[str, object] = field(default_factory=dict)
     p: float | None = None
+    scale: float = 1.0
 
 
 def cell_side_px(H: np.ndarray, n: int) -> float:
