@@ -69,7 +69,7 @@ from .cell_model import SHIPPED_MODEL, CellModel, cell_inputs
 from .cells import _probabilities, _remove_grid_lines, board_features
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
-from .grid_choice import KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features, same_grid
+from .grid_choice import KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
 from .grid_lines import (
     _crossing,
     _crossings,
@@ -196,11 +196,11 @@ class BoardReader:
                         small = search_copy(rgb, photo)
                         stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
                         hashed = (small, ink_map(small, stroke_px=stroke), ink_colour(small, stroke_px=stroke))
-                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind])
+                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind], made)
             except NoBoardError as exc:
                 reasons.append(f"{'straight lines' if kind == 'straight' else kind}: {exc.reason}")
                 continue
-            if any(same_grid(hyp, m) for m in made):
+            if hyp is None:  # a grid already made: its cells were not read again
                 continue
             hyp.kind, hyp.diag, hyp.trace, hyp.scale = kind, diag, sub, scale
             sub["scale"] = scale / float(sub.pop("_g", 1))  # type: ignore[arg-type]

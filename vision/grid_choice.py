@@ -31,7 +31,7 @@ from .errors import VisionError
 from .ink import _apply
 
 __all__ = ["KINDS", "BASE_FEATURES", "FEATURES", "SHIPPED_ARBITER", "Hypothesis", "GridArbiter", "features",
-           "with_kinds", "area_ratio", "wiggle", "same_grid"]
+           "with_kinds", "area_ratio", "wiggle", "same_grid", "same_lattice"]
 
 #: The hypotheses, in the order they are made: the straight ruled field, then the '#' in ink
 #: masks at 22 %, 45 % and 0 % (all ink above the noise) of the strongest ink.
@@ -151,12 +151,15 @@ def with_kinds(base: np.ndarray) -> np.ndarray:
 
 
 def same_grid(a: Hypothesis, b: Hypothesis) -> bool:
-    """Whether two hypotheses found the same grid (every lattice point within a tenth of a cell)."""
-    if a.n != b.n:
-        return False
-    g = np.stack(np.meshgrid(np.arange(a.n + 1), np.arange(a.n + 1)), -1).reshape(-1, 2).astype(np.float64)
-    dist = np.hypot(*(_apply(a.H, g) - _apply(b.H, g)).T)
-    return bool(dist.max() < 0.1 * cell_side_px(a.H, a.n))
+    """Whether two hypotheses found the same grid (:func:`same_lattice`)."""
+    return a.n == b.n and same_lattice(a.H, b.H, a.n)
+
+
+def same_lattice(Ha: np.ndarray, Hb: np.ndarray, n: int) -> bool:
+    """Whether two ``n`` x ``n`` grids (cells to px) put every lattice point within a tenth of a cell."""
+    g = np.stack(np.meshgrid(np.arange(n + 1), np.arange(n + 1)), -1).reshape(-1, 2).astype(np.float64)
+    dist = np.hypot(*(_apply(Ha, g) - _apply(Hb, g)).T)
+    return bool(dist.max() < 0.1 * cell_side_px(Ha, n))
 
 
 @dataclass

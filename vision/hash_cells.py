@@ -5,12 +5,13 @@ reaching past the field (real outer cells are larger than the middle one)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
-from .grid_choice import Hypothesis
+from .grid_choice import Hypothesis, same_lattice
 from .hand_grid import erase_mask, find_hash_grid
 from .ruling import clear_rules
 
@@ -31,13 +32,14 @@ def _darkest_near(d: np.ndarray, px: np.ndarray) -> np.ndarray:
 
 
 def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object],
-               hashed: tuple[np.ndarray, np.ndarray, np.ndarray], share: float) -> Hypothesis:
+               hashed: tuple[np.ndarray, np.ndarray, np.ndarray], share: float,
+               made: Sequence[Hypothesis] = ()) -> Hypothesis | None:
     """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found, at
     ink ``share``, in ``hashed`` - a copy of the photo
     :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its longer side (the same scale
     whatever the camera; :func:`~kinegym.vision.hand_grid.search_copy`), its ink map and
     colour - its lines erased from the ink ``d``, the cells read with the outer cells
-    reaching past the field."""
+    reaching past the field. None, before any cell is read, when the grid is one of ``made``."""
     h, w = d.shape
     _, dg, colour = hashed
     sizes = (reader.size,) if reader.size is not None else (3, 5)
@@ -45,6 +47,8 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
     fx, fy = w / dg.shape[1], h / dg.shape[0]
     to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
     H = to_d @ grid.H
+    if any(m.n == grid.n and same_lattice(H, m.H, grid.n) for m in made):
+        return None
     erase = cv2.resize(erase_mask(grid, dg), (w, h), interpolation=cv2.INTER_NEAREST)
     clean = d.copy()
     clean[erase > 0] = 0.0
