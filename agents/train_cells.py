@@ -258,9 +258,10 @@ def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
     """The temperature (0.25..8) with the least negative log-likelihood on ``x``, ``y``, with
     the model's rule weight."""
     best, best_nll = 1.0, np.inf
+    logits, rule = model.logits(x), rule_probs(x)  # the network runs once; only the temperature varies
     for t in np.exp(np.linspace(np.log(0.25), np.log(8.0), 97)):
         model.temperature = float(t)
-        p = model.probs(x)
+        p = model.calibrated(logits, rule)
         nll = -float(np.mean(np.log(np.maximum(p[np.arange(len(y)), y], 1e-12))))
         if nll < best_nll:
             best, best_nll = float(t), nll

@@ -117,9 +117,17 @@ def test_fit_learns_x_from_o_and_is_reproducible() -> None:
     again = fit(x, y, hidden=16, epochs=8, convs=(4, 8, 8), progress=False)
     np.testing.assert_array_equal(model.k1, again.k1)
     np.testing.assert_array_equal(model.w5, again.w5)
+    model.rule_weight = 0.3
     model.temperature = fit_temperature(model, xt, yt)
     assert 0.25 <= model.temperature <= 8.0
     assert expected_calibration_error(model.probs(xt), yt) < 0.1
+    # the search runs the network once; the reference asks probs() at every temperature
+    nll = []
+    for t in np.exp(np.linspace(np.log(0.25), np.log(8.0), 97)):
+        model.temperature = float(t)
+        nll.append(-np.mean(np.log(np.maximum(model.probs(xt)[np.arange(len(yt)), yt], 1e-12))))
+    ts = np.exp(np.linspace(np.log(0.25), np.log(8.0), 97))
+    assert fit_temperature(model, xt, yt) == float(ts[int(np.argmin(nll))])
 
 
 def test_collected_cells_are_kept_and_reused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

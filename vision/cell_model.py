@@ -166,8 +166,13 @@ class CellModel:
 
     def probs(self, x: np.ndarray) -> np.ndarray:
         """``(N, 3)`` calibrated probabilities of empty / X / O."""
-        rule = rule_probs(x)
-        z = self.logits(x) / self.temperature + self.rule_weight * np.log(np.clip(rule, 1e-4, 1.0))
+        return self.calibrated(self.logits(x), rule_probs(x))
+
+    def calibrated(self, logits: np.ndarray, rule: np.ndarray) -> np.ndarray:
+        """:meth:`probs` from the network's ``logits`` and the hand rule's probabilities
+        ``rule`` (both ``(N, 3)``), at this model's temperature and rule weight: lets a caller
+        that tries many temperatures run the network once."""
+        z = logits / self.temperature + self.rule_weight * np.log(np.clip(rule, 1e-4, 1.0))
         z = np.exp(z - z.max(axis=1, keepdims=True))
         return (z / z.sum(axis=1, keepdims=True)).astype(np.float64)
 
