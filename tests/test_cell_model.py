@@ -122,11 +122,11 @@ def test_fit_learns_x_from_o_and_is_reproducible() -> None:
     assert 0.25 <= model.temperature <= 8.0
     assert expected_calibration_error(model.probs(xt), yt) < 0.1
     # the search runs the network once; the reference asks probs() at every temperature
+    ts = np.exp(np.linspace(np.log(0.25), np.log(8.0), 97))
     nll = []
-    for t in np.exp(np.linspace(np.log(0.25), np.log(8.0), 97)):
+    for t in ts:
         model.temperature = float(t)
         nll.append(-np.mean(np.log(np.maximum(model.probs(xt)[np.arange(len(yt)), yt], 1e-12))))
-    ts = np.exp(np.linspace(np.log(0.25), np.log(8.0), 97))
     assert fit_temperature(model, xt, yt) == float(ts[int(np.argmin(nll))])
 
 
