@@ -24,7 +24,7 @@ from kinegym.envs.sim.climber_model import ClimberModel, G
 from kinegym.kinematics.climber import arm_ik_one
 from kinegym.kinematics.holes import HoleMap
 
-__all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "min_enclosing_circle", "rest_pose",
+__all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "holding_torques", "min_enclosing_circle", "rest_pose",
            "PHASES", "SWING_CHECKS", "SHIFT_CHECKS", "HALF_TURN"]
 
 #: The gait's phases, in order, that a failed move names: judged before trying (``plan``),
@@ -137,6 +137,51 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
     grippers' holding force (N).
     """
     p = model.phys
+    st = _statics(model, pose, hands, q, free)
+    norm = [(a0 / lim, b1 / lim) for a0, b1, lim in st.lines]
+    if safety is None:
+        t_best = _minimax_line(norm)
+    else:
+        t_best = _feasible_split(norm, st.grips, safety, p.holding_force_n if hold is None else hold)
+        if t_best is None:
+            return math.inf, math.inf
+    ratio = max(abs(a0 + b1 * t_best) for a0, b1 in norm)
+    grip = max(math.hypot(gx + dx * t_best, gy + dy * t_best) for gx, gy, dx, dy in st.grips)
+    t_free = max(abs(st.free_torques[0]) / p.shoulder_torque_ncm, abs(st.free_torques[1]) / p.elbow_torque_ncm)
+    return max(ratio, t_free), grip
+
+
+def holding_torques(model: ClimberModel, pose: tuple[float, float, float], hands: Sequence[tuple[float, float]],
+                    q: Sequence[tuple[float, float]], free: int) -> np.ndarray:
+    """The servo torques of :func:`swing_loads`' best split, signed: ``(3, 2)`` N cm, row
+    ``k`` = arm ``k``'s (shoulder, elbow), each the torque the servo applies to its outer
+    link (shoulder: the upper link, elbow: the lower link), counter-clockwise positive;
+    row ``free`` holds the free arm's own links against gravity. Not clipped to the servos'
+    limits. :class:`~kinegym.envs.sim.climber.PhysicsClimber` feeds them forward while a
+    hand is free."""
+    st = _statics(model, pose, hands, q, free)
+    t = _minimax_line([(a0 / lim, b1 / lim) for a0, b1, lim in st.lines])
+    out = np.empty((3, 2))
+    (a0s, b1s, _), (a0e, b1e, _), (b0s, c1s, _), (b0e, c1e, _) = st.lines
+    out[st.held[0]] = a0s + b1s * t, a0e + b1e * t
+    out[st.held[1]] = b0s + c1s * t, b0e + c1e * t
+    out[free] = st.free_torques
+    return out
+
+
+@dataclass
+class _Statics:
+    """The two holding arms' servo torques as affine functions of the split ``t``."""
+
+    held: tuple[int, int]  # the holding arms
+    lines: list[tuple[float, float, float]]  # (a0, b1, limit) per servo: torque = a0 + b1 t (N cm)
+    grips: list[tuple[float, float, float, float]]  # per holding hand: force (gx + dx t, gy + dy t) (N)
+    free_torques: tuple[float, float]  # the free arm's servos against its own weight (N cm, signed)
+
+
+def _statics(model: ClimberModel, pose: tuple[float, float, float], hands: Sequence[tuple[float, float]],
+             q: Sequence[tuple[float, float]], free: int) -> _Statics:
+    p = model.phys
     cx, cy, th = pose
     w_up, w_low, w_hand = p.upper_link_mass_kg * G, p.lower_link_mass_kg * G, p.hand_mass_kg * G
     offs = model.offsets(th)
@@ -148,11 +193,11 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
         ex, ey = sx + links[k][0] * math.cos(a1), sy + links[k][0] * math.sin(a1)
         pts.append((sx, sy, ex, ey, hands[k][0], hands[k][1]))
     # (a moment of a weight w at horizontal offset dx is -w dx: gravity is along -y)
-    # the free arm hangs from its shoulder: its weight and moment act on the body
+    # the free arm hangs from its shoulder: its weight and moment act on the body; its
+    # servos hold it with the opposite torques
     sx, sy, ex, ey, hx, hy = pts[free]
     m_free = -w_up * 0.5 * (ex - sx) - w_low * (0.5 * (ex + hx) - sx) - w_hand * (hx - sx)
-    t_free_s = abs(m_free) / p.shoulder_torque_ncm
-    t_free_e = abs(-w_low * 0.5 * (hx - ex) - w_hand * (hx - ex)) / p.elbow_torque_ncm
+    m_free_e = -w_low * 0.5 * (hx - ex) - w_hand * (hx - ex)
     w_arm = w_up + w_low + w_hand
     w_body = p.body_mass_kg * G + w_arm  # the free arm's weight, hung at its shoulder
     a, b = (1, 2) if free == 0 else (0, 2) if free == 1 else (0, 1)
@@ -182,16 +227,7 @@ def swing_loads(model: ClimberModel, pose: tuple[float, float, float], hands: Se
         lines.append((w_low * 0.5 * dex + dex * (f0y + w_up) - dey * f0x, dex * dfy - dey * dfx,
                       p.elbow_torque_ncm))
         grips.append((f0x, f0y + w_arm, dfx, dfy))
-    norm = [(a0 / lim, b1 / lim) for a0, b1, lim in lines]
-    if safety is None:
-        t_best = _minimax_line(norm)
-    else:
-        t_best = _feasible_split(norm, grips, safety, p.holding_force_n if hold is None else hold)
-        if t_best is None:
-            return math.inf, math.inf
-    ratio = max(abs(a0 + b1 * t_best) for a0, b1 in norm)
-    grip = max(math.hypot(gx + dx * t_best, gy + dy * t_best) for gx, gy, dx, dy in grips)
-    return max(ratio, t_free_s, t_free_e), grip
+    return _Statics((a, b), lines, grips, (-m_free, -m_free_e))
 
 
 def _feasible_split(lines: Sequence[tuple[float, float]], grips: Sequence[tuple[float, float, float, float]],
