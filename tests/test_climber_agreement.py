@@ -26,7 +26,7 @@ def test_model_and_physics_agree_and_the_model_rarely_accepts_what_physics_fails
     assert got.moves == 240
     assert got.cells[True, True] > 100 and got.cells[False, False] > 10  # both verdicts are exercised
     assert got.false_ok <= 0.01, got.table()  # at most 2 of 240 accepted moves fail in physics
-    assert got.rate >= 0.9, got.table()
+    assert got.rate >= 0.96, got.table()  # the bench's 2,000 moves: 99.25 % (95.60 % before the split was fed forward)
     assert all(why for why in got.falls)  # every fall names what gave way
     assert "| **kinematic ok** |" in got.table()
 

@@ -216,3 +216,54 @@ def test_bad_inputs() -> None:
     kin = KinematicClimber(MODEL)
     with pytest.raises(ValueError, match="reach"):
         kin.reset(WALL, (0, 7, 63))
+
+
+def test_holding_torques_are_the_best_split_of_swing_loads() -> None:
+    """:func:`holding_torques` is the split :func:`swing_loads` judges: its worst holding
+    servo over its limit is the best split's ratio, and the free arm's row holds its own
+    weight."""
+    rng = np.random.default_rng(4)
+    checked = 0
+    for st in resting_stances(WALL, MODEL, 60, 7):
+        kin = KinematicClimber(MODEL)
+        kin.reset(WALL, st)
+        hands = [tuple(WALL.xy[h]) for h in st]
+        free = int(rng.integers(3))
+        q = [tuple(v) for v in kin.q]
+        tq = C.holding_torques(MODEL, tuple(kin.pose), hands, q, free)
+        lim = np.array([MODEL.phys.shoulder_torque_ncm, MODEL.phys.elbow_torque_ncm])
+        ratio, _ = C.swing_loads(MODEL, tuple(kin.pose), hands, q, free)
+        held = [k for k in range(3) if k != free]
+        assert math.isclose(max(np.max(np.abs(tq[held]) / lim), np.max(np.abs(tq[free]) / lim)), ratio, rel_tol=1e-6)
+        checked += 1
+    assert checked == 60
+
+
+def test_the_split_fed_forward_carries_the_load_and_holds_a_move_the_position_loops_alone_stall_on() -> None:
+    """While a hand is free the holding servos are commanded the best split's torques: the
+    motors' own corrections stay small beside them. A move whose best split needs 94 % of a
+    servo's torque succeeds with the split fed forward (the default) and stalls with
+    ``load_feedforward: 0``, where the compliant servos share the load by their errors."""
+    import dataclasses
+
+    wall = HoleMap.grid(6, 14, 15.0, 1.0, 0.08, seed=290117535)  # from the agreement bench's walk
+    stance, arm, hole = (25, 24, 50), 1, 40
+    sim = PhysicsClimber(MODEL)
+    sim.reset(wall, stance)
+    assert sim._let_go(arm) is None and sim._ff is not None
+    sim._run(int(1.0 / sim.dt), lambda t: None, stall=False)
+    fed = np.abs(np.array(sim._ff))
+    motors = np.array([[abs(m.impulse) / sim.dt / 100.0 for m in pair] for pair in sim.motors])
+    held = [k for k in range(3) if k != arm]
+    assert fed[held].max() > 30.0  # N cm: a heavy stance
+    assert motors[held].max() < 0.2 * fed[held].max(), (fed, motors)
+
+    plan = plan_move(MODEL, wall, stance, arm, hole)
+    assert isinstance(plan, MovePlan) and 0.9 < plan.torque_ratio <= MODEL.phys.torque_safety
+    sim.reset(wall, stance)
+    assert sim.move(arm, hole).ok
+    alone = ClimberModel(MODEL.geom, dataclasses.replace(MODEL.phys, load_feedforward=0.0))
+    sim = PhysicsClimber(alone)
+    sim.reset(wall, stance)
+    res = sim.move(arm, hole)
+    assert res.outcome == "torque_limit" and res.phase == "swing", res

@@ -29,8 +29,9 @@ Two implementations share :class:`ClimberSim`'s interface (``reset``, ``move``,
   each gripper. Microseconds per move: for planning and training.
 * :class:`PhysicsClimber` (pymunk) is the reference: body, six links and three hands with
   masses and inertias, servos as velocity motors under a position loop with torque limits
-  (``max_force``), grippers as pivot joints that let go above their holding force, gravity
-  along -y. A servo asked for more than it has sags; a hand that sags misses its hole.
+  (``max_force``), the model's best load split fed forward as torque while a hand is free,
+  grippers as pivot joints that let go above their holding force, gravity along -y. A servo
+  asked for more than it has sags; a hand that sags misses its hole.
 
 Outcomes (:data:`OUTCOMES`): ``ok``, ``unreachable``, ``torque_limit``, ``missed_hole``,
 ``grip_lost``, ``fell`` (fewer than two grips). A failed move leaves the robot on its
@@ -51,6 +52,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from kinegym.envs.sim.climber_model import _G_CM, OUTCOMES, ClimberModel
+from kinegym.envs.sim.climber_servos import FEEDFORWARD_HZ, Servos
 from kinegym.envs.sim.gait import (
     GaitResult,
     MovePlan,
@@ -155,14 +157,16 @@ class KinematicClimber(ClimberSim):
 
 
 # ------------------------------------------------------------------ physics (pymunk)
-class PhysicsClimber(ClimberSim):
+class PhysicsClimber(Servos, ClimberSim):
     """The climber in pymunk: the reference for :class:`KinematicClimber`.
 
     Bodies: the body (a disc), three upper and three lower links (rods; the hand's mass
     sits at the lower link's tip). Pivot joints at shoulders and elbows, each with a
     :class:`pymunk.SimpleMotor` whose rate comes from a position loop (gain
     ``servo_gain_per_s``, speed limit ``servo_speed_dps``) and whose ``max_force`` is the
-    servo's torque limit. A gripping hand is a pivot joint to the wall; it lets go when the
+    servo's torque limit (:class:`~kinegym.envs.sim.climber_servos.Servos`); while a hand is
+    free the holding servos are also commanded the torques of the model's best load split
+    (``load_feedforward``). A gripping hand is a pivot joint to the wall; it lets go when the
     force through it exceeds ``holding_force_n``. No collisions: the links move in parallel
     planes in front of the wall. Bit-identical from the same reset and moves.
     """
@@ -193,6 +197,12 @@ class PhysicsClimber(ClimberSim):
         space.add(body)
         self.body = body
         self.upper, self.lower, self.motors, self.grips = [], [], [], [None, None, None]
+        # the load split fed forward while a hand is free: its arm, its weight (ramped), the
+        # weight's change per step and the torques of the last step (N cm; None = none)
+        self._ff_arm: int | None = None
+        self._ff_w, self._ff_rate = 0.0, 0.0
+        self._ff: list[tuple[float, float]] | None = None
+        self._ff_tick, self._ff_every = 0, max(1, round(p.physics_hz / FEEDFORWARD_HZ))
         cx, cy, th = pose
         c, s = math.cos(th), math.sin(th)
         for k in range(3):
@@ -245,6 +255,8 @@ class PhysicsClimber(ClimberSim):
         j.collide_bodies = False
         self.space.add(j)
         self.grips[k] = j
+        if self._ff_arm is not None:  # a hand grips again: the position loop takes the load back
+            self._ff_rate = -self.dt / max(self.model.phys.grip_release_s, self.dt)
 
     def _release(self, k: int) -> None:
         j = self.grips[k]
@@ -263,7 +275,10 @@ class PhysicsClimber(ClimberSim):
         j = self.grips[arm]
         p = self.model.phys
         t_open = p.grip_release_s
+        self._ff_arm, self._ff_rate = arm, self.dt / max(t_open, self.dt)  # feed the split forward as it opens
+        self._ff_tick = 0
         if j is None or t_open <= 0.0:
+            self._ff_w = 1.0
             self._release(arm)
             return None
         f0 = abs(j.impulse) / self.dt  # the force the grip carries now (below holding_force_n)
@@ -275,6 +290,7 @@ class PhysicsClimber(ClimberSim):
                          until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
         if lost in ("torque_limit", "sagged"):
             j.max_force = math.inf
+            self._ff_rate = -self.dt / t_open
             self._run(int(0.3 / self.dt), lambda t: None, stall=False)
             what = self._gave_way(lost)
             return "torque_limit", f"{what} while arm {arm + 1}'s gripper opened; it closed again", "swing"
@@ -306,38 +322,7 @@ class PhysicsClimber(ClimberSim):
             out[k, 1] = math.remainder(math.pi - (a2 - a1), 2 * math.pi) % (2 * math.pi)
         return out
 
-    # -- control loop -------------------------------------------------------------------------
-    def _control(self) -> None:
-        p = self.model.phys
-        kp, vmax = p.servo_gain_per_s, math.radians(p.servo_speed_dps)
-        ks = p.servo_stiffness_ncm_per_deg * 100.0 * 180.0 / math.pi  # kg cm^2 / s^2 per rad
-        ts_max, te_max = p.shoulder_torque_ncm * 100.0, p.elbow_torque_ncm * 100.0
-        floor_s, floor_e = p.servo_floor_share * ts_max, p.servo_floor_share * te_max
-        b = self.body
-        prev = self._prev_targets if self._prev_targets is not None else self.targets
-        inv_dt = 1.0 / self.dt
-        for k in range(3):
-            up, lo = self.upper[k], self.lower[k]
-            m_s, m_e = self.motors[k]
-            s_now = up.angle - b.angle
-            rel_now = lo.angle - up.angle  # = pi - elbow
-            s_t, e_t = self.targets[k]
-            err_s = math.remainder(s_t - s_now, 2 * math.pi)
-            err_e = math.remainder((math.pi - e_t) - rel_now, 2 * math.pi)
-            # velocity feed-forward (the targets' own rate, consistent round the closed chain)
-            # plus the position loop; SimpleMotor keeps a.w - b.w = rate
-            ff_s = math.remainder(s_t - prev[k][0], 2 * math.pi) * inv_dt
-            ff_e = -math.remainder(e_t - prev[k][1], 2 * math.pi) * inv_dt
-            m_s.rate = -max(-vmax, min(vmax, ff_s + kp * err_s))
-            m_e.rate = -max(-vmax, min(vmax, ff_e + kp * err_e))
-            # the torque a servo may use grows with its position error, up to its limit: a
-            # stiff but compliant servo. (Rigid velocity motors fight one another in the
-            # closed chain that three gripping arms make: their internal torques drift to
-            # the limit within a second even at rest.)
-            m_s.max_force = min(ts_max, ks * abs(err_s) + floor_s)
-            m_e.max_force = min(te_max, ks * abs(err_e) + floor_e)
-        self._prev_targets = self.targets
-
+    # -- control loop: the servos are :class:`~kinegym.envs.sim.climber_servos.Servos`' ----------
     def _run(self, steps: int, schedule: object, stall: bool = True,
              until: Callable[[], str | None] | None = None) -> str | None:
         """Step ``steps`` times; ``schedule(t)`` updates the targets first. Returns
@@ -350,6 +335,7 @@ class PhysicsClimber(ClimberSim):
         dt = self.dt
         stall_steps = int(p.stall_s / dt)
         limits = [(p.shoulder_torque_ncm * 100.0 * dt * 0.995, p.elbow_torque_ncm * 100.0 * dt * 0.995)] * 3
+        tops = (p.shoulder_torque_ncm * 100.0 * 0.995, p.elbow_torque_ncm * 100.0 * 0.995)
         stalled = [0] * 6
         for i in range(steps):
             schedule(i * dt)  # type: ignore[operator]
@@ -364,9 +350,16 @@ class PhysicsClimber(ClimberSim):
             if until is not None and (said := until()):
                 return said
             if stall:
+                ff = self._ff
                 for k in range(3):
                     for n in range(2):
-                        if abs(self.motors[k][n].impulse) >= limits[k][n]:
+                        if ff is None:
+                            at_limit = abs(self.motors[k][n].impulse) >= limits[k][n]
+                        else:
+                            fed = ff[k][n] * 100.0  # (cheap test first: the two could not reach the top)
+                            at_limit = (abs(fed) + abs(self.motors[k][n].impulse) / dt >= tops[n]
+                                        and self._total_torque(k, n, fed) >= tops[n])
+                        if at_limit:
                             stalled[2 * k + n] += 1
                             if stalled[2 * k + n] >= stall_steps:
                                 self.stalled = f"arm {k + 1}'s {('shoulder', 'elbow')[n]} servo"

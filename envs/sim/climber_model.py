@@ -52,11 +52,16 @@ class ClimberPhysics:
     servo_floor_share: float = _spec(0.15, lo_open=False, hi=1.0, doc="a servo holds this share of its torque "
                                                                      "without deflecting; above it, it gives "
                                                                      "servo_stiffness_ncm_per_deg")
+    load_feedforward: float = _spec(1.0, lo_open=False, hi=1.0, doc="share of the planned load split the holding "
+                                                                  "servos are commanded as torque while a hand is "
+                                                                  "free (0: the position loop alone)")
+    feedforward_floor_share: float = _spec(0.02, lo_open=False, hi=1.0, doc="a servo's torque at zero position "
+                                                                           "error while the load is fed forward")
     capture_radius_cm: float = _spec(0.8)
     holding_force_n: float = _spec(40.0)
     grip_release_s: float = _spec(0.3, lo_open=False, doc="a gripper opens over this long: its force ramps to zero (s)")
     reach_margin_cm: float = _spec(0.5, lo_open=False)
-    torque_safety: float = _spec(0.88, hi=2.0)
+    torque_safety: float = _spec(0.995, hi=2.0)
     stall_s: float = _spec(0.5, doc="a servo at its limit this long stalls (s)")
     sag_abort_cm: float = _spec(2.5, doc="a swing stops when a holding hand's servo targets miss its hole by "
                                          "this much (the body is sagging)")
