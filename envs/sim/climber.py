@@ -108,15 +108,16 @@ class ClimberSim:
         return cx, cy, heading
 
     def _ik_all(self, pose: Sequence[float], hands: Sequence[tuple[float, float]]) -> np.ndarray:
+        return np.array([self._ik_arm(pose, k, hands[k]) for k in range(3)])
+
+    def _ik_arm(self, pose: Sequence[float], k: int, hand: Sequence[float]) -> tuple[float, float]:
+        """Arm ``k``'s joint angles that put its hand at ``hand`` with the body at ``pose``."""
         g = self.model.geom
         cx, cy, th = pose
         c, s = math.cos(th), math.sin(th)
-        out = []
-        for k in range(3):
-            ox, oy = c * g.shoulders[k, 0] - s * g.shoulders[k, 1], s * g.shoulders[k, 0] + c * g.shoulders[k, 1]
-            bx, by = hands[k][0] - cx - ox, hands[k][1] - cy - oy
-            out.append(arm_ik_one(float(g.l1[k]), float(g.l2[k]), c * bx + s * by, -s * bx + c * by, 1))
-        return np.array(out)
+        ox, oy = c * g.shoulders[k, 0] - s * g.shoulders[k, 1], s * g.shoulders[k, 0] + c * g.shoulders[k, 1]
+        bx, by = hand[0] - cx - ox, hand[1] - cy - oy
+        return arm_ik_one(float(g.l1[k]), float(g.l2[k]), c * bx + s * by, -s * bx + c * by, 1)
 
 
 class KinematicClimber(ClimberSim):
@@ -423,16 +424,15 @@ class PhysicsClimber(Servos, ClimberSim):
         body_pose = target_pose
 
         shoulder = self._shoulder(body_pose, arm)
+        holding = self._ik_all(body_pose, held)  # the holding arms' targets stay put through the swing
 
         def swing(t: float, a: tuple[float, float] = old, b: tuple[float, float] = new, back: bool = False) -> None:
             f = min(1.0, t / t_swing)
             f = f * f * (3 - 2 * f)
-            hs = list(held)
-            hs[arm] = _around(shoulder, a, b, f, -turn if back else turn)
-            targets = self._ik_all(body_pose, hs)
+            targets = holding.copy()
             # the swinging arm aims from where the body really is (the robot knows it from
             # the holding arms' encoders): a sagging body does not throw the hand off
-            targets[arm] = self._ik_all(self.pose, hs)[arm]
+            targets[arm] = self._ik_arm(self.pose, arm, _around(shoulder, a, b, f, -turn if back else turn))
             self.targets = targets
 
         lost = self._run(n_swing, swing, until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
