@@ -52,7 +52,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from kinegym.envs.sim.climber_model import _G_CM, OUTCOMES, ClimberModel
-from kinegym.envs.sim.climber_servos import FEEDFORWARD_HZ, Servos
+from kinegym.envs.sim.climber_servos import FEEDFORWARD_HZ, Servos, pymunk_calls
 from kinegym.envs.sim.gait import (
     GaitResult,
     MovePlan,
@@ -115,7 +115,8 @@ class ClimberSim:
         g = self.model.geom
         cx, cy, th = pose
         c, s = math.cos(th), math.sin(th)
-        ox, oy = c * g.shoulders[k, 0] - s * g.shoulders[k, 1], s * g.shoulders[k, 0] + c * g.shoulders[k, 1]
+        sh0, sh1 = g.shoulders[k].tolist()
+        ox, oy = c * sh0 - s * sh1, s * sh0 + c * sh1
         bx, by = hand[0] - cx - ox, hand[1] - cy - oy
         return arm_ik_one(float(g.l1[k]), float(g.l2[k]), c * bx + s * by, -s * bx + c * by, 1)
 
@@ -203,6 +204,7 @@ class PhysicsClimber(Servos, ClimberSim):
         self._ff_arm: int | None = None
         self._ff_w, self._ff_rate = 0.0, 0.0
         self._ff: list[tuple[float, float]] | None = None
+        self._ff_made: tuple[object, float] | None = None  # the split and weight ``_ff`` was made of
         self._ff_tick, self._ff_every = 0, max(1, round(p.physics_hz / FEEDFORWARD_HZ))
         cx, cy, th = pose
         c, s = math.cos(th), math.sin(th)
@@ -310,8 +312,13 @@ class PhysicsClimber(Servos, ClimberSim):
     # -- state ----------------------------------------------------------------------------
     @property
     def pose(self) -> np.ndarray:  # type: ignore[override]
-        b = self.body
-        return np.array([b.position.x, b.position.y, math.remainder(b.angle, 2 * math.pi)])
+        return np.array(self._pose_now())
+
+    def _pose_now(self) -> tuple[float, float, float]:
+        """:attr:`pose` as a tuple (read every physics step of a swing)."""
+        pm = pymunk_calls()
+        x, y = pm.position(self.body)
+        return x, y, math.remainder(pm.angle(self.body), 2 * math.pi)
 
     @property
     def q(self) -> np.ndarray:  # type: ignore[override]
@@ -338,6 +345,7 @@ class PhysicsClimber(Servos, ClimberSim):
         limits = [(p.shoulder_torque_ncm * 100.0 * dt * 0.995, p.elbow_torque_ncm * 100.0 * dt * 0.995)] * 3
         tops = (p.shoulder_torque_ncm * 100.0 * 0.995, p.elbow_torque_ncm * 100.0 * 0.995)
         stalled = [0] * 6
+        impulse = pymunk_calls().impulse
         for i in range(steps):
             schedule(i * dt)  # type: ignore[operator]
             self._control()
@@ -345,7 +353,7 @@ class PhysicsClimber(Servos, ClimberSim):
             self.total_steps += 1
             for k in range(3):
                 j = self.grips[k]
-                if j is not None and j.impulse / dt > hold:
+                if j is not None and impulse(j) / dt > hold:
                     self._release(k)
                     return "fell" if sum(g is not None for g in self.grips) < 2 else "grip_lost"
             if until is not None and (said := until()):
@@ -355,10 +363,10 @@ class PhysicsClimber(Servos, ClimberSim):
                 for k in range(3):
                     for n in range(2):
                         if ff is None:
-                            at_limit = abs(self.motors[k][n].impulse) >= limits[k][n]
+                            at_limit = abs(impulse(self.motors[k][n])) >= limits[k][n]
                         else:
                             fed = ff[k][n] * 100.0  # (cheap test first: the two could not reach the top)
-                            at_limit = (abs(fed) + abs(self.motors[k][n].impulse) / dt >= tops[n]
+                            at_limit = (abs(fed) + abs(impulse(self.motors[k][n])) / dt >= tops[n]
                                         and self._total_torque(k, n, fed) >= tops[n])
                         if at_limit:
                             stalled[2 * k + n] += 1
@@ -432,7 +440,7 @@ class PhysicsClimber(Servos, ClimberSim):
             targets = holding.copy()
             # the swinging arm aims from where the body really is (the robot knows it from
             # the holding arms' encoders): a sagging body does not throw the hand off
-            targets[arm] = self._ik_arm(self.pose, arm, _around(shoulder, a, b, f, -turn if back else turn))
+            targets[arm] = self._ik_arm(self._pose_now(), arm, _around(shoulder, a, b, f, -turn if back else turn))
             self.targets = targets
 
         lost = self._run(n_swing, swing, until=lambda: "sagged" if self._sagging(p.sag_abort_cm) else None)
@@ -516,21 +524,29 @@ class PhysicsClimber(Servos, ClimberSim):
                 pose[1] + s * g.shoulders[k, 0] + c * g.shoulders[k, 1])
 
     def _sagging(self, tolerance_cm: float) -> bool:
-        """Is the body more than ``tolerance_cm`` from where the servo targets put it?"""
-        p = self.body.position
-        g = self.model.geom
+        """Is the body more than ``tolerance_cm`` from where the servo targets put it?
+        (Checked every step of a swing: the body's pose is read once.)"""
         b = self.body
+        pm = pymunk_calls()
+        px, py = pm.position(b)
+        angle = pm.angle(b)
+        ca, sa = math.cos(angle), math.sin(angle)
+        g = self.model.geom
+        targets = self.targets.tolist()
+        xy = self.holes.xy
         for k in range(3):
             if self.grips[k] is None:
                 continue
             # forward kinematics of the targets from the hand back to the shoulder
-            s_t, e_t = self.targets[k]
-            ang = b.angle + s_t
-            sx = p.x + math.cos(b.angle) * g.shoulders[k, 0] - math.sin(b.angle) * g.shoulders[k, 1]
-            sy = p.y + math.sin(b.angle) * g.shoulders[k, 0] + math.cos(b.angle) * g.shoulders[k, 1]
-            hx = sx + g.l1[k] * math.cos(ang) + g.l2[k] * math.cos(ang - e_t + math.pi)
-            hy = sy + g.l1[k] * math.sin(ang) + g.l2[k] * math.sin(ang - e_t + math.pi)
-            tx, ty = self.holes.xy[self.stance[k]]
+            s_t, e_t = targets[k]
+            ang = angle + s_t
+            sh0, sh1 = g.shoulders[k].tolist()
+            sx = px + ca * sh0 - sa * sh1
+            sy = py + sa * sh0 + ca * sh1
+            l1, l2 = float(g.l1[k]), float(g.l2[k])
+            hx = sx + l1 * math.cos(ang) + l2 * math.cos(ang - e_t + math.pi)
+            hy = sy + l1 * math.sin(ang) + l2 * math.sin(ang - e_t + math.pi)
+            tx, ty = xy[self.stance[k]].tolist()
             if math.hypot(hx - tx, hy - ty) > tolerance_cm:
                 return True
         return False

@@ -15,18 +15,46 @@ Units: pymunk works in cm, kg, s, so a torque of 1 N cm is 100 kg cm^2 / s^2.
 
 from __future__ import annotations
 
+import functools
 import math
-from typing import Any
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from kinegym.envs.sim.gait import holding_torques
 
-__all__ = ["Servos", "FEEDFORWARD_HZ"]
+__all__ = ["Servos", "FEEDFORWARD_HZ", "PymunkCalls", "pymunk_calls"]
 
 #: How often the controller recomputes the load split it feeds forward (its statics take
 #: about 100 us in Python; the configuration moves by a few hundredths of a cm between).
 FEEDFORWARD_HZ = 60.0
+
+
+
+class PymunkCalls(NamedTuple):
+    """pymunk's public properties as plain calls (their getters and setters)."""
+
+    angle: Callable[[Any], float]
+    position: Callable[[Any], Any]
+    angular_velocity: Callable[[Any], float]
+    impulse: Callable[[Any], float]
+    set_torque: Callable[[Any, float], None]
+    set_rate: Callable[[Any, float], None]
+    set_max_force: Callable[[Any, float], None]
+
+
+@functools.cache
+def pymunk_calls() -> PymunkCalls:
+    """pymunk's properties that the servo loop reads and sets a few dozen times a physics
+    step, as plain calls: ``obj.attr = v`` also passes through pymunk's typing mixin's
+    ``__setattr__``. (pymunk is imported here, not with the module: the kinematic climber
+    does not need it.)"""
+    import pymunk
+
+    body, con = pymunk.Body, pymunk.Constraint
+    return PymunkCalls(body.angle.fget, body.position.fget, body.angular_velocity.fget, con.impulse.fget,
+                       body.torque.fset, pymunk.SimpleMotor.rate.fset, con.max_force.fset)
 
 
 class Servos:
@@ -45,6 +73,7 @@ class Servos:
     _ff_w: float
     _ff_rate: float
     _ff: list[tuple[float, float]] | None
+    _ff_made: tuple[object, float] | None
     _ff_raw: np.ndarray
     _ff_tick: int
     _ff_every: int
@@ -55,7 +84,11 @@ class Servos:
     _tip: Any
 
     def _control(self) -> None:
-        """Set every motor's rate and torque cap (and the fed-forward torques) for the next step."""
+        """Set every motor's rate and torque cap (and the fed-forward torques) for the next step.
+
+        Runs every physics step, so it reads each body's angle once and sets pymunk's
+        properties through their setters directly (the same C calls without pymunk's
+        ``__setattr__`` hop); the arithmetic is the plain one, in the same order."""
         p = self.model.phys
         kp, vmax = p.servo_gain_per_s, math.radians(p.servo_speed_dps)
         ks = p.servo_stiffness_ncm_per_deg * 100.0 * 180.0 / math.pi  # kg cm^2 / s^2 per rad
@@ -65,23 +98,29 @@ class Servos:
         floor = p.servo_floor_share if ff is None else (1.0 - w) * p.servo_floor_share + w * p.feedforward_floor_share
         floor_s, floor_e = floor * ts_max, floor * te_max
         b = self.body
-        prev = self._prev_targets if self._prev_targets is not None else self.targets
+        targets = self.targets.tolist()
+        prev = self._prev_targets.tolist() if self._prev_targets is not None else targets
         inv_dt = 1.0 / self.dt
+        two_pi, pi, rem = 2 * math.pi, math.pi, math.remainder
+        pm = pymunk_calls()
+        angle, set_torque, set_rate, set_max_force = pm.angle, pm.set_torque, pm.set_rate, pm.set_max_force
+        b_angle = angle(b)
         on_body = 0.0
         for k in range(3):
             up, lo = self.upper[k], self.lower[k]
             m_s, m_e = self.motors[k]
-            s_now = up.angle - b.angle
-            rel_now = lo.angle - up.angle  # = pi - elbow
-            s_t, e_t = self.targets[k]
-            err_s = math.remainder(s_t - s_now, 2 * math.pi)
-            err_e = math.remainder((math.pi - e_t) - rel_now, 2 * math.pi)
+            up_angle = angle(up)
+            s_now = up_angle - b_angle
+            rel_now = angle(lo) - up_angle  # = pi - elbow
+            s_t, e_t = targets[k]
+            err_s = rem(s_t - s_now, two_pi)
+            err_e = rem((pi - e_t) - rel_now, two_pi)
             # velocity feed-forward (the targets' own rate, consistent round the closed chain)
             # plus the position loop; SimpleMotor keeps a.w - b.w = rate
-            ff_s = math.remainder(s_t - prev[k][0], 2 * math.pi) * inv_dt
-            ff_e = -math.remainder(e_t - prev[k][1], 2 * math.pi) * inv_dt
-            m_s.rate = -max(-vmax, min(vmax, ff_s + kp * err_s))
-            m_e.rate = -max(-vmax, min(vmax, ff_e + kp * err_e))
+            ff_s = rem(s_t - prev[k][0], two_pi) * inv_dt
+            ff_e = -rem(e_t - prev[k][1], two_pi) * inv_dt
+            set_rate(m_s, -max(-vmax, min(vmax, ff_s + kp * err_s)))
+            set_rate(m_e, -max(-vmax, min(vmax, ff_e + kp * err_e)))
             # the torque a servo may use grows with its position error, up to its limit: a
             # stiff but compliant servo. (Rigid velocity motors fight one another in the
             # closed chain that three gripping arms make: their internal torques drift to
@@ -92,13 +131,14 @@ class Servos:
                 # loop keeps to what the servo has left
                 # (pymunk clears a body's torque after every step: it is set, not added to)
                 t_s, t_e = ff[k][0] * 100.0, ff[k][1] * 100.0
-                up.torque = t_s - t_e
-                lo.torque = t_e
+                set_torque(up, t_s - t_e)
+                set_torque(lo, t_e)
                 on_body -= t_s
                 cap_s, cap_e = min(cap_s, ts_max - abs(t_s)), min(cap_e, te_max - abs(t_e))
-            m_s.max_force, m_e.max_force = cap_s, cap_e
+            set_max_force(m_s, cap_s)
+            set_max_force(m_e, cap_e)
         if ff is not None:
-            b.torque = on_body
+            set_torque(b, on_body)
         self._prev_targets = self.targets
 
     def _feedforward(self) -> list[tuple[float, float]] | None:
@@ -126,7 +166,10 @@ class Servos:
                                            [(float(a), float(e)) for a, e in self.q], free)
         self._ff_tick += 1
         w, ls, le = self._ff_w * p.load_feedforward, p.shoulder_torque_ncm, p.elbow_torque_ncm
-        self._ff = [(min(ls, max(-ls, s * w)), min(le, max(-le, e * w))) for s, e in self._ff_raw.tolist()]
+        made = self._ff_made
+        if self._ff is None or made is None or made[0] is not self._ff_raw or made[1] != w:  # else as last step
+            self._ff = [(min(ls, max(-ls, s * w)), min(le, max(-le, e * w))) for s, e in self._ff_raw.tolist()]
+            self._ff_made = (self._ff_raw, w)
         return self._ff
 
     def _total_torque(self, k: int, n: int, fed: float) -> float:
@@ -135,6 +178,7 @@ class Servos:
         a motor that could not keep its rate (at its cap) pushed towards it, which gives it."""
         m = self.motors[k][n]
         a, b = (self.body, self.upper[k]) if n == 0 else (self.upper[k], self.lower[k])
-        j = abs(m.impulse) / self.dt
+        pm = pymunk_calls()
+        j = abs(pm.impulse(m)) / self.dt
         # the motor keeps a.w - b.w = rate and pushes b by +j when a.w - b.w ended above its rate
-        return abs(fed + (j if (a.angular_velocity - b.angular_velocity) > m.rate else -j))
+        return abs(fed + (j if (pm.angular_velocity(a) - pm.angular_velocity(b)) > m.rate else -j))

@@ -274,13 +274,17 @@ def _minimax_line(lines: Sequence[tuple[float, float]]) -> float:
     lo, hi = min(brk) - 1.0, max(brk) + 1.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        # the slope of the maximum at mid: that of the largest term
-        best, slope = -1.0, 0.0
+        # the slope of the maximum at mid: that of the largest term |a + b mid|, which rises
+        # when its b has the sign of a + b mid (the physics' controller runs this at 60 Hz)
+        best, rising = -1.0, False
         for a, b in lines:
             v = a + b * mid
-            if abs(v) > best:
-                best, slope = abs(v), b if v >= 0 else -b
-        if slope > 0:
+            if v >= 0:
+                if v > best:
+                    best, rising = v, b > 0
+            elif -v > best:
+                best, rising = -v, b < 0
+        if rising:
             hi = mid
         else:
             lo = mid
