@@ -99,3 +99,24 @@ def test_feasible_moves_edge_cases_are_plain() -> None:
     assert not feasible_moves(model, wall, st, [0], [7], rest="no rest pose").any()
     with pytest.raises(ValueError, match="differ in length"):
         feasible_moves(model, wall, st, [0, 1], [7])
+
+
+def test_minimax_line_finds_the_least_worst_split() -> None:
+    """``_minimax_line`` (the best load split, run by the physics controller at 60 Hz): the
+    worst ``|a + b t|`` at its ``t`` is the exact minimum over ``t``, which lies where two
+    terms cross or where one term is zero, on random sets of 2-6 lines with
+    flat, repeated and mirrored terms."""
+    rng = np.random.default_rng(7)
+    for _ in range(3000):
+        n = int(rng.integers(2, 7))
+        a = rng.uniform(-3, 3, n)
+        b = np.where(rng.random(n) < 0.15, 0.0, rng.uniform(-2, 2, n))
+        if rng.random() < 0.2:
+            a[-1], b[-1] = -a[0], -b[0]
+        lines = list(zip(a.tolist(), b.tolist()))
+        t = C._minimax_line(lines)
+        cand = [0.0] + [-a[i] / b[i] for i in range(n) if b[i] != 0.0] + [
+            -(a[j] + s * a[i]) / (b[j] + s * b[i]) for i in range(n) for j in range(i + 1, n) for s in (1, -1)
+            if abs(b[j] + s * b[i]) > 1e-12]
+        exact = min(float(np.max(np.abs(a + b * c))) for c in cand)
+        assert float(np.max(np.abs(a + b * t))) <= exact + 1e-7 * (1 + exact)
