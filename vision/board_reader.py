@@ -7,7 +7,7 @@ Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
    with the background a morphological closing of a shrunk copy (removes strokes, keeps
    light gradients, shadows and glare). Luma makes every pen colour dark and a yellow
    highlighter nearly invisible; normalising by the background makes the map independent
-   of uneven light.
+   of uneven light. A photo with sensor noise is smoothed first (:func:`~kinegym.vision.ink.denoised`).
 2. **Grid.** Long straight segments (probabilistic Hough on the thresholded map) are
    merged into lines, split into the two families of the grid by direction (perspective
    lets each family fan out), and ordered across. The longest lines of each family are
@@ -84,7 +84,7 @@ from .grid_lines import (
 )
 from .hand_grid import search_copy
 from .hash_cells import _darkest_near, read_hash
-from .ink import _apply, _as_rgb, ink_colour, ink_map
+from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_colour, ink_map, noise_sigma
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
 
@@ -145,10 +145,11 @@ class BoardReader:
 
         ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
         in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
-        :func:`debug_image`, and ``trace["hypotheses"]``: each grid tried, (kind, probability).
+        :func:`debug_image`, ``trace["hypotheses"]``: each grid tried, (kind, probability), and
+        ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``).
         """
         made, reasons = [], []
-        for hyp in self._hypotheses(image, reasons):
+        for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
             if self.arbiter is None or hyp.p >= self.arbiter.accept:
                 break
@@ -173,14 +174,19 @@ class BoardReader:
         arbiter): what :meth:`read` chooses from, for training and inspecting the arbiter."""
         return list(self._hypotheses(image, []))
 
-    def _hypotheses(self, image: object, reasons: list[str]) -> Iterator[Hypothesis]:
-        """The hypotheses, lazily, in :data:`KINDS` order; a kind that finds nothing adds its
-        reason to ``reasons``, one that finds a grid already made is passed over."""
+    def _hypotheses(self, image: object, reasons: list[str], info: dict[str, object] | None = None
+                    ) -> Iterator[Hypothesis]:
+        """The hypotheses, lazily, in :data:`KINDS` order; a kind that finds nothing adds its reason
+        to ``reasons``, one that finds a grid already made is passed over; ``info`` gets ``"noise"``."""
         rgb = photo = _as_rgb(image)
         h0, w0 = rgb.shape[:2]
         scale = min(1.0, self.max_side_px / max(h0, w0))
         if scale < 1.0:
             rgb = cv2.resize(rgb, (int(round(w0 * scale)), int(round(h0 * scale))), interpolation=cv2.INTER_AREA)
+        info = {} if info is None else info
+        info["noise"] = noise = noise_sigma(rgb)
+        if noise > NOISY_SIGMA:  # a noisy sensor: smoothed first (and the '#' sought on that)
+            rgb, photo = denoised(rgb, noise), None
         h, w = rgb.shape[:2]
         diag = math.hypot(h, w)
         d = ink_map(rgb, stroke_px=max(6.0, diag / 100))

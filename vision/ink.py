@@ -11,7 +11,8 @@ import numpy as np
 
 from .errors import VisionError
 
-__all__ = ["ink_map", "ink_colour", "ink_threshold", "colour_at", "angle_deg", "unit"]
+__all__ = ["ink_map", "ink_colour", "ink_threshold", "colour_at", "angle_deg", "unit", "noise_sigma", "denoised",
+           "NOISY_SIGMA"]
 
 
 def _apply(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -61,6 +62,39 @@ def _darkness(y8: np.ndarray, stroke_px: float) -> np.ndarray:
     floor = cv2.max(bg.reshape(bg.shape[0], -1), 8).reshape(bg.shape)
     np.divide(d, floor.astype(np.float32), out=d)
     return np.subtract(1.0, d, out=d)
+
+
+#: The noise (:func:`noise_sigma`, grey levels) above which the reader smooths a photo first.
+#: Clean photos and prints estimate 0-1.5; a sensor's noise of 3 grey levels estimates about 2.
+NOISY_SIGMA = 2.0
+_LAPLACE = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)  # Immerkaer's: flat on lines and ramps
+
+
+def noise_sigma(image: object) -> float:
+    """The photo's pixel noise, grey levels (1 sigma), from every other pixel each way:
+    Immerkaer's difference-of-Laplacians operator (blind to flat areas, ramps and straight
+    lines) over the grey image, its median absolute response over its spread for white noise
+    (``0.6745 * 6``). Strokes and edges cover a minority of pixels and move the median little.
+    (JPEG and 8-bit rounding hide some noise: white noise of 4 / 8 / 12 levels estimates about
+    2.7 / 5.4 / 8.)"""
+    rgb = _as_rgb(image)
+    h, w = rgb.shape[:2]
+    g = cv2.cvtColor(cv2.resize(rgb, (max(3, w // 2), max(3, h // 2)), interpolation=cv2.INTER_NEAREST),
+                     cv2.COLOR_RGB2GRAY)
+    r = cv2.convertScaleAbs(cv2.filter2D(g, cv2.CV_16S, _LAPLACE)[1:-1, 1:-1])  # |response|, 255 at most
+    # the median from the histogram (np.median sorts: several times slower here)
+    hist = cv2.calcHist([r], [0], None, [256], [0, 256]).ravel()
+    med = int(np.searchsorted(np.cumsum(hist), 0.5 * r.size))
+    return med / (0.6745 * 6.0)
+
+
+def denoised(image: object, sigma: float) -> np.ndarray:
+    """``image`` (uint8 RGB) with noise of ``sigma`` (:func:`noise_sigma`) smoothed: a Gaussian
+    of ``0.15 sigma`` px, then a 3 x 3 median (which takes the speckle the blur leaves and keeps
+    a stroke's edges). On the 15 real photos with white noise added (seeds 100 on), reads right
+    of 15 at noise 5 / 8 / 12 / 16 levels: 15 / 15 / 14 / 9, against 12 / 6 / 4 / 0 unsmoothed."""
+    rgb = _as_rgb(image)
+    return cv2.medianBlur(cv2.GaussianBlur(rgb, (0, 0), 0.15 * float(sigma)), 3)
 
 
 def ink_threshold(d: np.ndarray, share: float = 0.22) -> float:
