@@ -207,3 +207,24 @@ def test_zoo_hyperparameters_are_the_default_configs() -> None:
     keys = ("n_envs", "n_timesteps", "policy", "policy_kwargs", "env_kwargs", "learning_rate", "clip_range", "n_steps",
             "batch_size", "n_epochs", "gamma", "gae_lambda", "ent_coef", "vf_coef", "max_grad_norm", "normalize")
     assert {k: zoo[k] for k in keys} == {k: ours[k] for k in keys}
+
+
+def test_evaluate_measures_the_planner_it_will_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``evaluate``'s estimate scales from the planner's own moves (``planner=True``): each step
+    asks the planner; random masked moves, the training estimates' rate, ask it nothing. (In
+    physics a climb's moves take longer than random ones: ``evaluate`` had said about 42 minutes
+    for about 12.)"""
+    from kinegym.agents import gait_planner
+    from kinegym.agents import train as T
+
+    asked: list[int] = []
+    act = gait_planner.PlannerAgent.act
+
+    def counted(self: gait_planner.PlannerAgent, env: object, obs: object = None) -> int | None:
+        asked.append(1)
+        return act(self, env, obs)
+
+    monkeypatch.setattr(gait_planner.PlannerAgent, "act", counted)
+    kw = {"memory": True, "hints": True, "mode": "kinematic"}
+    assert T.steps_per_second(kw, steps=10) > 0 and not asked
+    assert T.steps_per_second(kw, steps=10, planner=True) > 0 and len(asked) == 10

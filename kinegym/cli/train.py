@@ -31,8 +31,8 @@ def _evaluate_cost(policy_kwargs: dict[str, Any], episodes: int, modes: tuple[st
 
     total, parts = 0.0, []
     for mode in modes:
-        sps = T.steps_per_second({**policy_kwargs, "mode": mode}, steps=12 if mode == "physics" else 40)
-        total += 2 * episodes * T.TYPICAL_EPISODE / sps
+        sps = T.steps_per_second({**policy_kwargs, "mode": mode}, steps=12 if mode == "physics" else 40, planner=True)
+        total += 2 * episodes * T.TYPICAL_CLIMB / sps
         parts.append(f"{mode} {sps:.0f} steps/s")
     return total, ", ".join(parts)
 
