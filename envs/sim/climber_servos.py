@@ -31,7 +31,6 @@ __all__ = ["Servos", "FEEDFORWARD_HZ", "PymunkCalls", "pymunk_calls"]
 FEEDFORWARD_HZ = 60.0
 
 
-
 class PymunkCalls(NamedTuple):
     """pymunk's public properties as plain calls (their getters and setters)."""
 
