@@ -494,9 +494,7 @@ def learning_curve(run: Path, earlier: Sequence[Path] = ()) -> Path | None:
 # ------------------------------------------------------------------ costs, announced before long work
 #: a rough episode length for training's estimates (a policy still learning wanders; a stuck one uses all 200)
 TYPICAL_EPISODE = 100
-#: a climb of a held-out wall by the planner or a trained policy, for ``evaluate``'s estimate (the
-#: planner's mean is 16.2 moves, 3,241 over 200 walls; a trained policy takes 1.1-1.2x that, and
-#: one that fails uses up to 200)
+#: a held-out climb, for ``evaluate``'s estimate (the planner's mean: 16.2 moves; a trained policy's 1.1-1.2x)
 TYPICAL_CLIMB = 18
 
 
@@ -516,10 +514,9 @@ def steps_per_second(env_kwargs: dict[str, Any], steps: int = 40, make_env: EnvF
         t0, n = time.perf_counter(), 0
         while n < steps:
             mask = env.get_wrapper_attr("action_masks")()
-            a = agent.act(env.unwrapped, obs) if agent is not None else None
-            if a is None:
-                a = int(rng.choice(np.flatnonzero(mask))) if mask.any() else 0
-            obs, _, term, trunc, _ = env.step(a)
+            a = agent.act(env.unwrapped, obs) if agent is not None else None  # (None: no route, a random move)
+            obs, _, term, trunc, _ = env.step(a if a is not None else int(rng.choice(np.flatnonzero(mask)))
+                                              if mask.any() else 0)
             n += 1
             if term or trunc:
                 obs, _ = env.reset()

@@ -146,8 +146,7 @@ class BoardReader:
         ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
         in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
         :func:`debug_image`, ``trace["hypotheses"]``: each grid tried, (kind, probability), and
-        ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``).
-        """
+        ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``)."""
         made, reasons = [], []
         for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
