@@ -33,6 +33,7 @@ import argparse
 import math
 import time
 import timeit
+from collections.abc import Callable
 
 import numpy as np
 
@@ -155,15 +156,70 @@ def real_like(count: int) -> None:
               f"{np.mean([r[4] for r in res]):.2f} |", flush=True)
 
 
+def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], bool]]:
+    """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
+    ``(label, transform(img, i), mirrored)``; ``mirrored``: the board's columns read reversed."""
+    import cv2
+
+    def size(side: int) -> Callable[[np.ndarray, int], np.ndarray]:
+        return lambda img, i: cv2.resize(img, (side, side * 3 // 4), interpolation=cv2.INTER_CUBIC)
+
+    def noise(level: float) -> Callable[[np.ndarray, int], np.ndarray]:  # a phone's sensor in dim light
+        return lambda img, i: np.clip(img + np.random.default_rng(100 + i).normal(0.0, level, img.shape), 0,
+                                      255).astype(np.uint8)
+
+    def keystone(img: np.ndarray, top: bool) -> np.ndarray:  # the camera tilted: one side 20 % shorter
+        h, w = img.shape[:2]
+        src = np.float32([[0, 0], [w, 0], [w, h], [0, h]])
+        dst = src + (np.float32([[0.1 * w, 0], [-0.1 * w, 0], [0, 0], [0, 0]]) if top
+                     else np.float32([[0, 0.1 * h], [0, 0], [0, 0], [0, -0.1 * h]]))
+        table = np.median(np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]]), axis=0)
+        return cv2.warpPerspective(img, cv2.getPerspectiveTransform(src, dst), (w, h),
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=tuple(float(v) for v in table))
+
+    def lit(img: np.ndarray, shade: np.ndarray) -> np.ndarray:
+        return np.clip(img * shade[..., None], 0, 255).astype(np.uint8)
+
+    def shadow(img: np.ndarray) -> np.ndarray:  # a hard-edged shadow over the lower part, at 55 %
+        h, w = img.shape[:2]
+        m = np.ones((h, w), np.float32)
+        cv2.fillPoly(m, [np.array([[0, int(0.3 * h)], [w, int(0.55 * h)], [w, h], [0, h]], np.int32)], 0.55)
+        return lit(img, cv2.GaussianBlur(m, (0, 0), 3))
+
+    def turned(img: np.ndarray, deg: float) -> np.ndarray:
+        h, w = img.shape[:2]
+        return cv2.warpAffine(img, cv2.getRotationMatrix2D((w / 2, h / 2), deg, 1.0), (w, h),
+                              borderMode=cv2.BORDER_REPLICATE)
+
+    def jpeg(img: np.ndarray, quality: int) -> np.ndarray:
+        buf = cv2.imencode(".jpg", img[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, quality])[1]
+        return np.ascontiguousarray(cv2.imdecode(buf, cv2.IMREAD_COLOR)[..., ::-1])
+
+    return [("as taken, 577 x 433", lambda img, i: img, False), ("enlarged to 960 x 720", size(960), False),
+            ("enlarged to 4000 x 3000", size(4000), False),
+            *((f"as taken, white noise of {v} grey levels added", noise(v), False) for v in (5, 8, 12)),
+            ("keystone, top 20 % narrower", lambda img, i: keystone(img, True), False),
+            ("keystone, left side 20 % shorter", lambda img, i: keystone(img, False), False),
+            ("blurred, Gaussian 3 px at 960 x 720", lambda img, i: cv2.GaussianBlur(size(960)(img, i), (0, 0), 3.0),
+             False),
+            ("JPEG quality 25", lambda img, i: jpeg(img, 25), False),
+            ("a hard shadow across", lambda img, i: shadow(img), False),
+            ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
+                1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), False),
+            ("turned 10 deg", lambda img, i: turned(img, 10.0), False),
+            ("grey, no colour", lambda img, i: cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_RGB2GRAY), cv2.COLOR_GRAY2RGB),
+             False),
+            ("mirrored", lambda img, i: np.ascontiguousarray(img[:, ::-1]), True)]
+
+
 def real_photos(repeat: int = 1) -> None:
     """The 15 real dev photos (``tests/data/real``, labelled by eye): cells and boards right,
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
-    4,000 px phone photo (the reader works at one scale whatever the camera), and with white
-    noise of 5, 8 and 12 grey levels added (seeded per photo)."""
+    4,000 px phone photo (the reader works at one scale whatever the camera), and under the
+    conditions of :func:`_photo_conditions` (noise, keystone, blur, JPEG, shadow, light, turned,
+    grey, mirrored)."""
     import json
     from pathlib import Path
-
-    import cv2
 
     from kinegym.vision.image_io import read_image
 
@@ -172,18 +228,13 @@ def real_photos(repeat: int = 1) -> None:
     reader = BoardReader(size=3)
     print("\n| real dev photos (15, whiteboard) | cells right | boards right | refused | ms per frame median / max |")
     print("|---|---|---|---|---|")
-    sizes = (("as taken, 577 x 433", None, 0), ("enlarged to 960 x 720", 960, 0), ("enlarged to 4000 x 3000", 4000, 0),
-             *((f"as taken, white noise of {v} grey levels added", None, v) for v in (5, 8, 12)))
-    for label, side, noise in sizes:
+    for label, transform, mirrored in _photo_conditions():
         cells = boards = refused = 0
         times = []
         for i, (name, want) in enumerate(sorted(labels.items())):
-            img = read_image(data / name)
-            if side:
-                img = cv2.resize(img, (side, side * 3 // 4), interpolation=cv2.INTER_CUBIC)
-            if noise:  # a phone's sensor in dim light (the reader smooths a noisy photo first)
-                grain = np.random.default_rng(100 + i).normal(0.0, noise, img.shape)
-                img = np.clip(img + grain, 0, 255).astype(np.uint8)
+            img = transform(read_image(data / name), i)
+            if mirrored:
+                want = "|".join(row[::-1] for row in want.split("|"))
             best = math.inf
             for _ in range(repeat):
                 t0 = time.perf_counter()
