@@ -13,8 +13,9 @@ Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
   highlighter scribbles.
 * ``hard 3x3`` and ``lab 5x5`` (the thesis's set-up: camera on a stand, black pen).
 
-Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px,
-and the real-like set (:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3
+Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px
+and under what held-out phone photos add (noise, keystone, blur, JPEG, shadow, light, turned,
+grey, mirrored), and the real-like set (:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3
 boards on paper, whiteboards, graph and notebook paper, 520-4,000 px; seeds 20,000 on), per
 surface and per photo size, read as the game reads them (``BoardReader(size=3)``, with the
 shipped cell classifier), and beside it what the hand rule alone would have called.
