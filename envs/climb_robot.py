@@ -53,9 +53,14 @@ class ClimbRobot:
         self.est_holes = (int(start[0]), int(start[1]), int(start[2]))
         self.relocalise(None, rng)
 
-    def move(self, arm: int, hole: int) -> tuple[str, str]:
-        """Move ``arm`` (0..2) to ``hole`` (map row); the outcome and its reason."""
-        res = self.sim.move(arm, hole)
+    def move(self, arm: int, hole: int, offered: bool = False) -> tuple[str, str]:
+        """Move ``arm`` (0..2) to ``hole`` (map row); the outcome and its reason. ``offered``:
+        :meth:`options` offered the move from the believed stance; when that is the true one
+        the kinematic climber need not judge it again."""
+        if offered and self.mode == "kinematic" and self.est_holes == self.sim.stance:
+            res = self.sim.move(arm, hole, judged=True)  # type: ignore[call-arg]
+        else:
+            res = self.sim.move(arm, hole)
         return res.outcome, res.reason
 
     def relocalise(self, moved_arm: int | None, rng: np.random.Generator, hole: int | None = None) -> None:

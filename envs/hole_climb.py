@@ -263,7 +263,7 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         if hole < 0:
             outcome, reason = "unreachable", f"there is no candidate {k}"
         else:
-            outcome, reason = self.robot.move(arm, hole)
+            outcome, reason = self.robot.move(arm, hole, offered=bool(self.mask[a]))
         self.last_outcome, self.last_reason = outcome, reason
         if outcome != "ok":
             self._failed.add((self.believed_stance, arm, hole))

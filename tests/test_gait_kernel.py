@@ -120,3 +120,33 @@ def test_minimax_line_finds_the_least_worst_split() -> None:
             if abs(b[j] + s * b[i]) > 1e-12]
         exact = min(float(np.max(np.abs(a + b * c))) for c in cand)
         assert float(np.max(np.abs(a + b * t))) <= exact + 1e-7 * (1 + exact)
+
+
+def test_a_move_the_kernel_judged_ends_where_its_plan_ends_bit_for_bit() -> None:
+    # the env's step moves without judging again what the kernel found feasible: the stance,
+    # pose and joints after it must be plan_move's own
+    from kinegym.envs.sim.climber import KinematicClimber
+
+    model = ClimberModel.from_config("climber")
+    rng = np.random.default_rng(5)
+    wall = HoleMap.grid(7, 12, 14.0, 1.0, 0.05, seed=3)
+    quick, full = KinematicClimber(model), KinematicClimber(model)
+    start = start_stances(model, wall)[0]
+    quick.reset(wall, start)
+    full.reset(wall, start)
+    moved = 0
+    for _ in range(60):
+        st = quick.stance
+        cand = candidate_holes(wall, st, 8, 40.0)
+        arms, targets = np.repeat([0, 1, 2], len(cand)), np.tile(cand, 3)
+        ok = np.flatnonzero(feasible_moves(model, wall, st, arms, targets))
+        if not len(ok):
+            break
+        i = int(rng.choice(ok))
+        a, h = int(arms[i]), int(targets[i])
+        got, want = quick.move(a, h, judged=True), full.move(a, h)
+        assert got.ok and want.ok and got.plan is None and want.plan is not None
+        assert got.stance == want.stance and np.array_equal(got.pose, want.pose)
+        assert np.array_equal(quick.q, full.q) and np.array_equal(quick.pose, full.pose)
+        moved += 1
+    assert moved >= 30

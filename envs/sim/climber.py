@@ -60,6 +60,7 @@ from kinegym.envs.sim.gait import (
     _path_length,
     min_enclosing_circle,
     plan_move,
+    rest_joints,
     rest_pose,
 )
 from kinegym.kinematics.climber import arm_ik_one
@@ -146,13 +147,26 @@ class KinematicClimber(ClimberSim):
             self._cache[key] = got
         return got
 
-    def move(self, arm: int, hole: int) -> GaitResult:
+    def move(self, arm: int, hole: int, judged: bool = False) -> GaitResult:
+        """Move ``arm`` to ``hole`` (map row). ``judged``: the caller's gait kernel
+        (:func:`~kinegym.envs.sim.gait_kernel.feasible_moves`, heading 0, from this stance)
+        already found the move feasible, so only where it ends is worked out - the swing's
+        statics are not judged twice (the env's step: a third of its time) and the result
+        carries no plan. The end pose and joints are :func:`plan_move`'s, bit for bit."""
+        st = list(self.stance)
+        st[arm] = hole
+        new = (st[0], st[1], st[2])
+        key = (self.stance, arm, hole)
+        if judged and key not in self._cache and float(self.pose[2]) == 0.0:
+            end = rest_pose(self.model, self.holes, new, 0.0)
+            if not isinstance(end, str):
+                self.stance, self.pose = new, np.array(end)
+                self.q = rest_joints(self.model, self.holes, new, end)
+                return GaitResult("ok", "moved", self.stance, self.pose.copy())
         plan = self.judge(arm, hole)
         if not isinstance(plan, MovePlan):
             return GaitResult(plan[0], plan[1], self.stance, self.pose.copy(), phase="plan")
-        st = list(self.stance)
-        st[arm] = hole
-        self.stance = (st[0], st[1], st[2])
+        self.stance = new
         self.pose = np.array(plan.pose_end)
         self.q = plan.q_end.copy()  # type: ignore[union-attr]
         return GaitResult("ok", "moved", self.stance, self.pose.copy(), plan=plan)

@@ -25,7 +25,7 @@ from kinegym.kinematics.climber import arm_ik_one
 from kinegym.kinematics.holes import HoleMap
 
 __all__ = ["MovePlan", "GaitResult", "plan_move", "swing_loads", "holding_torques", "min_enclosing_circle", "rest_pose",
-           "PHASES", "SWING_CHECKS", "SHIFT_CHECKS", "HALF_TURN"]
+           "rest_joints", "PHASES", "SWING_CHECKS", "SHIFT_CHECKS", "HALF_TURN"]
 
 #: The gait's phases, in order, that a failed move names: judged before trying (``plan``),
 #: the body ``shift`` on the old holes, the ``swing``, ``reach``-ing into the new hole, the
@@ -419,12 +419,22 @@ def plan_move(model: ClimberModel, holes: HoleMap, stance: Sequence[int], arm: i
     if best is None:
         return failed  # type: ignore[return-value]
     turn, worst, grip = best
-    q_end = []
+    q_end = rest_joints(model, holes, new_stance, pose_end, branch)
+    return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, q_end, turn)
+
+
+def rest_joints(model: ClimberModel, holes: HoleMap, stance: Sequence[int], pose: tuple[float, float, float],
+                branch: int = 1) -> np.ndarray:
+    """The joint angles ``(3, 2)`` (rad) that hold ``stance`` with the body at ``pose`` (a
+    move's end: ``pose`` its :func:`rest_pose`)."""
+    xy, offs, links = holes.xy_list, model.offsets(pose[2]), model._links  # type: ignore[attr-defined]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    q = []
     for k in range(3):
-        hx, hy = xy[new_stance[k]]
-        bx, by = hx - pose_end[0] - offs[k][0], hy - pose_end[1] - offs[k][1]
-        q_end.append(arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch))
-    return MovePlan(arm, hole, pose_from, pose_to, np.array(q), worst, grip, pose_end, np.array(q_end), turn)
+        hx, hy = xy[stance[k]]
+        bx, by = hx - pose[0] - offs[k][0], hy - pose[1] - offs[k][1]
+        q.append(arm_ik_one(links[k][0], links[k][1], c * bx + s * by, -s * bx + c * by, branch))
+    return np.array(q)
 
 
 def _swing_statics(model: ClimberModel, pose_to: tuple[float, float, float], hands: list[tuple[float, float]],
