@@ -4,6 +4,7 @@ paler pens, much larger frames, a grid cut off by the picture's edge."""
 
 import contextlib
 import json
+import math
 import warnings
 from pathlib import Path
 
@@ -91,6 +92,32 @@ def test_the_noise_estimate_follows_the_noise() -> None:
     est = [noise_sigma(noisy(img, s, 0) if s else img) for s in (0, 4, 8, 12)]
     assert est[0] < 1.0 and all(a < b for a, b in zip(est, est[1:])), est
     assert 2.0 < est[1] < 3.5 and 4.5 < est[2] < 6.5 and 6.5 < est[3] < 9.5, est
+
+
+def keystoned(img: np.ndarray) -> np.ndarray:
+    """``img`` as a camera tilted back sees it: the top 20 % narrower, the corners it leaves
+    filled with the photo's border colour (the table)."""
+    h, w = img.shape[:2]
+    src = np.float32([[0, 0], [w, 0], [w, h], [0, h]])
+    dst = src + np.float32([[0.1 * w, 0], [-0.1 * w, 0], [0, 0], [0, 0]])
+    table = np.median(np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]]), axis=0)
+    return cv2.warpPerspective(img, cv2.getPerspectiveTransform(src, dst), (w, h), borderMode=cv2.BORDER_CONSTANT,
+                               borderValue=tuple(float(v) for v in table))
+
+
+def test_a_rival_line_direction_is_tried_too(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Keystone: image 11's bent, converging rows spread their direction's peak below the one
+    its five X's strokes line up to. The '#' is sought along both (the rival is tried when it
+    stands at least half as high above the median energy) and the better '#' wins: the board
+    reads; with the best pair alone it read ``..X|..O|...``."""
+    from kinegym.vision import hand_grid
+
+    name = "kvuletic2_image11.jpeg"
+    img = keystoned(read_image(DATA / name))
+    assert matches(BoardReader().read(img).text(), LABELS[name])
+    monkeypatch.setattr(hand_grid, "_RIVAL", math.inf)
+    with contextlib.suppress(NoBoardError):
+        assert not matches(BoardReader().read(img).text(), LABELS[name])
 
 
 def test_a_grid_cut_off_by_the_frame_edge() -> None:

@@ -55,6 +55,7 @@ __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "e
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
 _BANDS = 18  # bands across a family (each about a 1/18 of the image)
+_RIVAL = 0.5  # a second direction peak this high (above the median energy) as the first is tried too
 
 
 @dataclass
@@ -148,10 +149,14 @@ def _stroke_width(mask: np.ndarray) -> float:
     return max(1.0, min(widths)) if widths else 2.0
 
 
-def _directions(mask: np.ndarray, width: float) -> tuple[float, float]:
-    """The two families' line directions (rad, 0..pi): the angles at which the ink's
-    projection is most peaked (sum of squared counts in stroke-wide bins, a Radon energy that
-    long strokes dominate: length counts squared), the second at least 40 deg from the first."""
+def _directions(mask: np.ndarray, width: float) -> list[tuple[float, float]]:
+    """The two families' line directions (rad, 0..pi), best pair first: the angles at which
+    the ink's projection is most peaked (sum of squared counts in stroke-wide bins, a Radon
+    energy that long strokes dominate: length counts squared), the second at least 40 deg
+    from the first. When another peak that far off stands above the energy's median at least
+    :data:`_RIVAL` as high as the chosen second one (a '#' whose two lines of a family
+    converge, or are bent, spreads its peak; a board of X's lines up their strokes), the pair
+    with it follows: the '#' scores decide."""
     ys, xs = np.nonzero(mask)
     if len(xs) > 12000:  # a fixed subsample: the energy's shape needs no more
         pick = np.linspace(0, len(xs) - 1, 12000).astype(np.intp)
@@ -177,9 +182,11 @@ def _directions(mask: np.ndarray, width: float) -> tuple[float, float]:
     m = len(th)
     off = np.abs(((np.arange(m) - i + m // 2) % m) - m // 2) * step  # degrees apart
     peak = (energy >= np.roll(energy, 1)) & (energy >= np.roll(energy, -1)) & (off >= 40)
-    j = int(np.argmax(np.where(peak, energy, -1.0))) if peak.any() else (i + m // 2) % m
+    js = [int(j) for j in np.argsort(-np.where(peak, energy, -1.0))[:2] if peak[j]] or [(i + m // 2) % m]
+    floor = float(np.median(energy))
+    js = js[:1] + [j for j in js[1:] if energy[j] - floor >= _RIVAL * (energy[js[0]] - floor)]
     # line directions: the normals turned a quarter
-    return float(np.mod(th[i] + np.pi / 2, np.pi)), float(np.mod(th[j] + np.pi / 2, np.pi))
+    return [(float(np.mod(th[i] + np.pi / 2, np.pi)), float(np.mod(th[j] + np.pi / 2, np.pi))) for j in js]
 
 
 def _rotation(phi: float, shape: tuple[int, int]) -> tuple[np.ndarray, tuple[int, int]]:
@@ -440,8 +447,22 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
-    phi_a, phi_b = _directions(mask, width)
     dark = np.where(mask > 0, d, 0.0).astype(np.float32)
+    grids, first = [], None
+    for phi_a, phi_b in _directions(mask, width):  # a rival second direction is tried too: the better '#' wins
+        try:
+            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, dark, t, width, phi_a, phi_b))
+        except NoBoardError as exc:
+            first = first or exc
+    if not grids:
+        raise first  # type: ignore[misc]
+    return max(grids, key=lambda g: g.score / (2 * (g.n - 1)))
+
+
+def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
+                ruling: Ruling | None, mask: np.ndarray, dark: np.ndarray, t: float, width: float, phi_a: float,
+                phi_b: float) -> HashGrid:
+    """:func:`_find_hash_grid` for one pair of line directions."""
     fa, Ma, rot_a = _tracks(mask, phi_a, width, dark)
     fb, Mb, rot_b = _tracks(mask, phi_b, width, dark)
     for tr in fa:
