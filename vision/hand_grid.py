@@ -39,6 +39,7 @@ import contextlib
 import dataclasses
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -150,13 +151,11 @@ def _stroke_width(mask: np.ndarray) -> float:
 
 
 def _directions(mask: np.ndarray, width: float) -> list[tuple[float, float]]:
-    """The two families' line directions (rad, 0..pi), best pair first: the angles at which
-    the ink's projection is most peaked (sum of squared counts in stroke-wide bins, a Radon
-    energy that long strokes dominate: length counts squared), the second at least 40 deg
-    from the first. When another peak that far off stands above the energy's median at least
-    :data:`_RIVAL` as high as the chosen second one (a '#' whose two lines of a family
-    converge, or are bent, spreads its peak; a board of X's lines up their strokes), the pair
-    with it follows: the '#' scores decide."""
+    """The two families' line directions (rad, 0..pi), best pair first: the angles at which the
+    ink's projection is most peaked (sum of squared counts in stroke-wide bins, a Radon energy
+    long strokes dominate), the second at least 40 deg from the first. A rival second peak, at
+    least :data:`_RIVAL` as high above the median (converging or bent lines spread their peak,
+    X's line up their strokes), makes a second pair: the '#' scores decide."""
     ys, xs = np.nonzero(mask)
     if len(xs) > 12000:  # a fixed subsample: the energy's shape needs no more
         pick = np.linspace(0, len(xs) - 1, 12000).astype(np.intp)
@@ -447,11 +446,20 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
-    dark = np.where(mask > 0, d, 0.0).astype(np.float32)
+    dark, memo = np.where(mask > 0, d, 0.0).astype(np.float32), {}
+
+    def traced(phi: float) -> list[Track]:  # each direction traced once (a rival pair shares the first)
+        if phi not in memo:
+            memo[phi], M, rot = _tracks(mask, phi, width, dark)
+            for tr in memo[phi]:
+                tr.frame = (M, rot)
+                tr.colour = None if colour is None else colour_at(d, colour, tr.pts)
+        return memo[phi]
+
     grids, first = [], None
     for phi_a, phi_b in _directions(mask, width):  # a rival second direction is tried too: the better '#' wins
         try:
-            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, dark, t, width, phi_a, phi_b))
+            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b))
         except NoBoardError as exc:
             first = first or exc
     if not grids:
@@ -460,18 +468,10 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
 
 
 def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
-                ruling: Ruling | None, mask: np.ndarray, dark: np.ndarray, t: float, width: float, phi_a: float,
-                phi_b: float) -> HashGrid:
-    """:func:`_find_hash_grid` for one pair of line directions."""
-    fa, Ma, rot_a = _tracks(mask, phi_a, width, dark)
-    fb, Mb, rot_b = _tracks(mask, phi_b, width, dark)
-    for tr in fa:
-        tr.frame = (Ma, rot_a)
-    for tr in fb:
-        tr.frame = (Mb, rot_b)
-    if colour is not None:
-        for tr in fa + fb:
-            tr.colour = colour_at(d, colour, tr.pts)
+                ruling: Ruling | None, mask: np.ndarray, traced: Callable[[float], list[Track]], t: float,
+                width: float, phi_a: float, phi_b: float) -> HashGrid:
+    """:func:`_find_hash_grid` for one pair of line directions (``traced``: a direction's tracks)."""
+    fa, fb = traced(phi_a), traced(phi_b)
     side = float(max(d.shape))
     ruled_a, ruled_b = is_ruled(fa, side), is_ruled(fb, side)
     ruled = [phi for phi, r in ((phi_a, ruled_a), (phi_b, ruled_b)) if r]
