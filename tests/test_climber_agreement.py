@@ -56,11 +56,11 @@ def _inject_failure(env: gym.Env, times: int | None) -> list[tuple]:
     robot = env.unwrapped.robot
     real, failed = robot.move, []
 
-    def move(arm: int, hole: int) -> tuple[str, str]:
+    def move(arm: int, hole: int, offered: bool = False) -> tuple[str, str]:
         if times is None or len(failed) < times:
             failed.append((robot.sim.stance, arm, hole))
             return "torque_limit", "injected: a servo stalled"
-        return real(arm, hole)
+        return real(arm, hole, offered)
 
     robot.move = move
     return failed
