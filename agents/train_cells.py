@@ -1,9 +1,11 @@
 """Train the board reader's cell classifier (:mod:`kinegym.vision.cell_model`) on rendered photos.
 
 ``python -m kinegym.agents.train_cells --out vision/data/cell_model.npz`` renders photos, reads
-each with the hand rule (and the first grid found: the grid arbiter is trained on this model's
-calls, not before it), and keeps the cells of every board whose grid was found right (each true
-cell centre falls in its own cell; the classifier cannot mend a wrong grid). It then:
+each with the hand rule, makes every grid hypothesis the reader makes (the grid arbiter is
+trained on this model's calls, so it is not asked here), and keeps the cells of every hypothesis
+whose grid is right (each true cell centre falls in its own cell; the classifier cannot mend a
+wrong grid): the arbiter may choose any of them, so the classifier learns each one's view of
+the cells. It then:
 
 1. splits the photos (never the cells of one photo) into training and held-out parts;
 2. fits the network in torch (one thread) by AdamW on the training cells, each batch's windows
@@ -37,7 +39,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from kinegym.vision.board_reader import BoardReader, NoBoardError
+from kinegym.vision.board_reader import BoardReader
 from kinegym.vision.cell_model import (
     N_CHANNELS,
     N_INPUTS,
@@ -100,8 +102,10 @@ class CellData:
 
 
 def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
-    """Render one photo, read it with the hand rule; its cells' inputs and truth, or None when
-    no grid or a wrong one was found."""
+    """Render one photo and make every grid hypothesis the reader makes of it (hand rule, no
+    arbiter); the inputs and truth of the cells of each hypothesis whose grid is right, or None
+    when none is. Each right grid is a view of the cells the reader may be asked to call, as the
+    arbiter may choose any of them."""
     kind, seed = job
     if kind == "real-like":
         from kinegym.envs.sim.scenes_real import real_like_scene
@@ -118,21 +122,19 @@ def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
         # the canvas's y runs up the page: row 0, on top, is the highest
         centres = hs.photo.project(hs.origin_cm + np.stack([rc[:, 1] + 0.5, n - rc[:, 0] - 0.5], 1) * hs.cell_cm)
         truth, image = hs.cells, hs.photo.image
-    trace: dict[str, object] = {}
-    try:
-        reading = BoardReader(size=n, model=None, arbiter=None).read(image, trace)
-    except NoBoardError:
+    xs = [h.inputs for h in BoardReader(size=n, model=None, arbiter=None).hypotheses(image)
+          if h.n == n and grid_is_right(np.diag([1.0 / h.scale, 1.0 / h.scale, 1.0]) @ h.H, centres, n)]
+    if not xs:
         return None
-    if not grid_is_right(reading.homography, centres, n):
-        return None
-    return np.asarray(trace["cell_inputs"], np.float32), truth.reshape(-1).astype(np.int64)
+    return np.concatenate(xs).astype(np.float32), np.tile(truth.reshape(-1).astype(np.int64), len(xs))
 
 
 def grid_is_right(homography: np.ndarray, centres: np.ndarray, n: int) -> bool:
     """Whether a reading's grid (``homography``: cells to px) puts every true cell centre
     (``centres`` ``(n * n, 2)`` px, row by row) in its own cell, outer cells reaching up to 0.9
     of a cell past the field."""
-    g = _apply(np.linalg.inv(homography), centres)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate grid puts centres at infinity: not right
+        g = _apply(np.linalg.inv(homography), centres)
     rc = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), -1).reshape(-1, 2)
     inside = bool((g > -0.9).all() and (g < n + 0.9).all())
     return inside and bool((np.clip(np.floor(g[:, ::-1]), 0, n - 1) == rc).all())
@@ -170,20 +172,22 @@ def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 
         try:
             with np.load(io.BytesIO(raw), allow_pickle=False) as z:
                 a = {key: z[key] for key in z.files}
-            key = (int(a["real_like"]), int(a["hard"]), int(a["x"].shape[1]))
+            # caches from before every hypothesis was kept (only the first grid found) lack "all_grids"
+            key = (int(a["real_like"]), int(a["hard"]), int(a["x"].shape[1]), int(a.get("all_grids", 0)))
             data = CellData(a["x"].astype(np.float32), a["y"].astype(np.int64), a["photo"].astype(np.int64),
                             int(a["kept"]), int(a["photos"]))
         except (KeyError, ValueError, OSError, EOFError, IndexError) as err:
             raise FileError(p, f"not a cell cache ({err})", "an .npz written by --cells") from None
-        if key == (real_like, hard, N_INPUTS):
+        if key == (real_like, hard, N_INPUTS, 1):
             return data
         if progress:
-            print(f"  {p} holds the cells of {key[0]} real-like + {key[1]} hard photos ({key[2]} inputs); collecting "
-                  f"{real_like} + {hard} ({N_INPUTS}) anew", file=sys.stderr)
+            print(f"  {p} holds the cells of {key[0]} real-like + {key[1]} hard photos ({key[2]} inputs"
+                  f"{'' if key[3] else ', first grids only'}); collecting {real_like} + {hard} ({N_INPUTS}) anew",
+                  file=sys.stderr)
     data = collect(real_like, hard, workers, progress)
     buf = io.BytesIO()
     np.savez_compressed(buf, x=data.x, y=data.y, photo=data.photo, kept=data.kept, photos=data.photos,
-                        real_like=real_like, hard=hard)
+                        real_like=real_like, hard=hard, all_grids=1)
     write_atomic(p, buf.getvalue(), suffixes=(".npz",), what="cell cache")
     return data
 

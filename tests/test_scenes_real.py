@@ -39,11 +39,11 @@ def test_the_promised_conditions_occur() -> None:
         notes = real_like_scene(np.random.default_rng(seed), width=520).notes
         sizes.add((notes["width"], notes["height"]))
         for key in ("ghosts", "second_grid", "binding", "pen_in_view", "highlighter", "cut_off", "hard_shadow",
-                    "light_spot", "reflection"):
+                    "light_spot", "reflection", "gone_over"):
             seen[key] = seen.get(key, 0) + bool(notes.get(key))
         seen[notes["surface"]] = seen.get(notes["surface"], 0) + 1
     assert all(seen.get(k, 0) >= 3 for k in ("ghosts", "second_grid", "binding", "pen_in_view", "highlighter",
-                                             "cut_off", "hard_shadow", "light_spot", "reflection", "graph",
+                                             "cut_off", "hard_shadow", "light_spot", "reflection", "gone_over", "graph",
                                              "notebook", "whiteboard", "paper")), seen
     assert {(520, 390), (520, 693)} <= sizes  # landscape and portrait
 

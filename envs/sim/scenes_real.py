@@ -13,7 +13,8 @@ than that (issue 18 lists what a held-out set of real photos holds), so
   degrees), some **double-stroked**, overshooting their crossings by a random amount, so
   the inner cells are **unequal** and the **outer cells larger** than the inner ones.
 * **Marks** that touch the lines or spill over them, **lopsided X** whose strokes cross
-  off-centre, ovals that do not close.
+  off-centre, **X gone over** two to four times, some passes in loops (a real whiteboard X
+  drawn so), ovals that do not close.
 * **Ghosts**: an erased earlier '#' and erased marks still faintly there.
 * **Clutter**: the **page edge** and the table, a **spiral binding**, a **pen** lying on the
   page, a **second partial grid** beside the board, highlighter scribbles.
@@ -129,6 +130,24 @@ def _lopsided_x(centre: np.ndarray, size: float, rng: np.random.Generator, wobbl
     return out
 
 
+def _gone_over(strokes: list[np.ndarray], size: float, rng: np.random.Generator) -> list[np.ndarray]:
+    """The strokes of a mark and 1-3 more passes over each, as a person goes over an X again:
+    each pass from near the stroke's ends, some in loops (a scribble along the stroke)."""
+    out = list(strokes)
+    for s in strokes:
+        a, b = s[0], s[-1]
+        for _ in range(int(rng.integers(1, 4))):
+            pa, pb = a + rng.normal(0, 0.05 * size, 2), b + rng.normal(0, 0.05 * size, 2)
+            if rng.random() < 0.5:
+                out.append(hand_line(pa, pb, rng, 0.05 * size))
+            else:  # loops: a circle of the pen's sweep carried along the stroke
+                t = np.linspace(0.0, 1.0, 60)[:, None]
+                turns, radius = float(rng.uniform(3.0, 6.0)), float(rng.uniform(0.03, 0.07)) * size
+                phase = 2 * math.pi * turns * t
+                out.append(pa + t * (pb - pa) + radius * np.hstack([np.cos(phase), np.sin(phase)]))
+    return out
+
+
 def _clutter(canvas: BoardCanvas, rng: np.random.Generator, box: tuple[float, float, float, float],
              grid_pen: Pen, notes: dict[str, object]) -> None:
     """Things people leave in view: a pen on the page, highlighter, a second partial grid,
@@ -222,6 +241,9 @@ def real_like_scene(seed: int | np.random.Generator | None = None, width: int | 
     ``width`` fixes the photo's width (px); by default it is drawn from :data:`WIDTHS`.
     """
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    # marks gone over draw from their own stream (spawning draws nothing from ``rng``): every
+    # other draw of a seed is what it was before they were added
+    over = rng.spawn(1)[0]
     game = Game(3, 3, 3)
     cells = np.array(random_position(game, rng).cells(), dtype=np.int64)
     notes: dict[str, object] = {}
@@ -278,6 +300,9 @@ def real_like_scene(seed: int | np.random.Generator | None = None, width: int | 
             pen = mark_pens[0] if cells[r, k] == X else mark_pens[1]
             strokes = (_lopsided_x(centre, size, rng, 0.04) if cells[r, k] == X
                        else hand_o(centre, size, rng, float(rng.uniform(0.6, 1.5))))
+            if cells[r, k] == X and over.random() < 0.25:
+                strokes = _gone_over(strokes, size, over)
+                notes["gone_over"] = True
             for s in strokes:
                 canvas.stroke(s, pen)
     box = (origin[0] - outer[0], origin[1] - outer[2], origin[0] + inner[0] + outer[1], origin[1] + inner[1] + outer[3])
