@@ -1,11 +1,12 @@
 """Train the board reader's cell classifier (:mod:`kinegym.vision.cell_model`) on rendered photos.
 
 ``python -m kinegym.agents.train_cells --out vision/data/cell_model.npz`` renders photos, reads
-each with the hand rule, makes every grid hypothesis the reader makes (the grid arbiter is
-trained on this model's calls, so it is not asked here), and keeps the cells of every hypothesis
-whose grid is right (each true cell centre falls in its own cell; the classifier cannot mend a
-wrong grid): the arbiter may choose any of them, so the classifier learns each one's view of
-the cells. It then:
+each with the hand rule (and the first grid found: the grid arbiter is trained on this model's
+calls, not before it), and keeps the cells of every board whose grid was found right (each true
+cell centre falls in its own cell; the classifier cannot mend a wrong grid). With
+``--all-grids`` it makes every grid hypothesis the reader makes instead and keeps the cells of
+each whose grid is right (the arbiter may choose any of them, so the classifier learns each
+one's view of the cells): the shipped ensemble's second model. It then:
 
 1. splits the photos (never the cells of one photo) into training and held-out parts;
 2. fits the network in torch (one thread) by AdamW on the training cells, each batch's windows
@@ -39,7 +40,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from kinegym.vision.board_reader import BoardReader
+from kinegym.vision.board_reader import BoardReader, NoBoardError
 from kinegym.vision.cell_model import (
     N_CHANNELS,
     N_INPUTS,
@@ -101,12 +102,12 @@ class CellData:
     photos: int
 
 
-def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
-    """Render one photo and make every grid hypothesis the reader makes of it (hand rule, no
-    arbiter); the inputs and truth of the cells of each hypothesis whose grid is right, or None
-    when none is. Each right grid is a view of the cells the reader may be asked to call, as the
-    arbiter may choose any of them."""
-    kind, seed = job
+def _scene_cells(job: tuple[str, int, bool]) -> tuple[np.ndarray, np.ndarray] | None:
+    """Render one photo, read it with the hand rule; the inputs and truth of the cells of the
+    first grid found, or with ``all_grids`` (the job's third item) of every grid hypothesis whose
+    grid is right (each a view of the cells the reader may be asked to call, as the arbiter may
+    choose any of them); None when no grid is right."""
+    kind, seed, all_grids = job
     if kind == "real-like":
         from kinegym.envs.sim.scenes_real import real_like_scene
 
@@ -122,8 +123,17 @@ def _scene_cells(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray] | None:
         # the canvas's y runs up the page: row 0, on top, is the highest
         centres = hs.photo.project(hs.origin_cm + np.stack([rc[:, 1] + 0.5, n - rc[:, 0] - 0.5], 1) * hs.cell_cm)
         truth, image = hs.cells, hs.photo.image
-    xs = [h.inputs for h in BoardReader(size=n, model=None, arbiter=None).hypotheses(image)
-          if h.n == n and grid_is_right(np.diag([1.0 / h.scale, 1.0 / h.scale, 1.0]) @ h.H, centres, n)]
+    reader = BoardReader(size=n, model=None, arbiter=None)
+    if all_grids:
+        xs = [h.inputs for h in reader.hypotheses(image)
+              if h.n == n and grid_is_right(np.diag([1.0 / h.scale, 1.0 / h.scale, 1.0]) @ h.H, centres, n)]
+    else:
+        trace: dict[str, object] = {}
+        try:
+            reading = reader.read(image, trace)
+        except NoBoardError:
+            return None
+        xs = [np.asarray(trace["cell_inputs"])] if grid_is_right(reading.homography, centres, n) else []
     if not xs:
         return None
     return np.concatenate(xs).astype(np.float32), np.tile(truth.reshape(-1).astype(np.int64), len(xs))
@@ -140,11 +150,13 @@ def grid_is_right(homography: np.ndarray, centres: np.ndarray, n: int) -> bool:
     return inside and bool((np.clip(np.floor(g[:, ::-1]), 0, n - 1) == rc).all())
 
 
-def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) -> CellData:
-    """The cells of ``real_like`` + ``hard`` photos (module docstring), read in ``workers``
-    processes; the order, and so the data, does not depend on ``workers``."""
-    jobs = [("real-like", REAL_LIKE_SEED + i) for i in range(real_like)] + [("hard", HARD_SEED + i)
-                                                                           for i in range(hard)]
+def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True, all_grids: bool = False
+            ) -> CellData:
+    """The cells of ``real_like`` + ``hard`` photos (module docstring; ``all_grids``: of every
+    right hypothesis), read in ``workers`` processes; the order, and so the data, does not
+    depend on ``workers``."""
+    jobs = [("real-like", REAL_LIKE_SEED + i, all_grids) for i in range(real_like)] + [
+        ("hard", HARD_SEED + i, all_grids) for i in range(hard)]
     xs, ys, ids = [], [], []
     results = in_order(_scene_cells, jobs, workers, _Ticker(len(jobs), "photos", progress))
     for k, res in enumerate(results):
@@ -158,10 +170,11 @@ def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) 
     return CellData(np.concatenate(xs), np.concatenate(ys), np.concatenate(ids), len(xs), len(jobs))
 
 
-def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 2, progress: bool = True
-                    ) -> CellData:
+def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 2, progress: bool = True,
+                    all_grids: bool = False) -> CellData:
     """The cells of :func:`collect`, kept in ``path`` (.npz): read back when the file holds the
-    cells of the same photos (counts and input width), else collected and written (atomically).
+    cells of the same photos (counts, input width and ``all_grids``), else collected and written
+    (atomically).
     The cells are what the reader of the time saw: after changing the reader, delete the file.
     A file that is not such a cache is a :class:`~kinegym.configs.io.FileError` naming it."""
     from kinegym.configs.io import FileError, read_bytes, write_atomic
@@ -172,22 +185,23 @@ def load_or_collect(path: str | Path, real_like: int, hard: int, workers: int = 
         try:
             with np.load(io.BytesIO(raw), allow_pickle=False) as z:
                 a = {key: z[key] for key in z.files}
-            # caches from before every hypothesis was kept (only the first grid found) lack "all_grids"
+            # caches from before --all-grids (the first grid found) lack "all_grids"
             key = (int(a["real_like"]), int(a["hard"]), int(a["x"].shape[1]), int(a.get("all_grids", 0)))
             data = CellData(a["x"].astype(np.float32), a["y"].astype(np.int64), a["photo"].astype(np.int64),
                             int(a["kept"]), int(a["photos"]))
         except (KeyError, ValueError, OSError, EOFError, IndexError) as err:
             raise FileError(p, f"not a cell cache ({err})", "an .npz written by --cells") from None
-        if key == (real_like, hard, N_INPUTS, 1):
+        if key == (real_like, hard, N_INPUTS, int(all_grids)):
             return data
         if progress:
             print(f"  {p} holds the cells of {key[0]} real-like + {key[1]} hard photos ({key[2]} inputs"
-                  f"{'' if key[3] else ', first grids only'}); collecting {real_like} + {hard} ({N_INPUTS}) anew",
+                  f"{', every right grid' if key[3] else ', first grids'}); collecting {real_like} + {hard} "
+                  f"({N_INPUTS}{', every right grid' if all_grids else ', first grids'}) anew",
                   file=sys.stderr)
-    data = collect(real_like, hard, workers, progress)
+    data = collect(real_like, hard, workers, progress, all_grids)
     buf = io.BytesIO()
     np.savez_compressed(buf, x=data.x, y=data.y, photo=data.photo, kept=data.kept, photos=data.photos,
-                        real_like=real_like, hard=hard, all_grids=1)
+                        real_like=real_like, hard=hard, all_grids=int(all_grids))
     write_atomic(p, buf.getvalue(), suffixes=(".npz",), what="cell cache")
     return data
 
@@ -275,11 +289,12 @@ def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
 
 def train(real_like: int = 3000, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 128,
           epochs: int = 15, decay: float = 1e-3, rule_weight: float = 0.3, seed: int = 0, progress: bool = True,
-          cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS) -> tuple[CellModel, dict[str, object]]:
-    """Collect (or reuse ``cells``, see :func:`load_or_collect`), fit, calibrate (module
-    docstring): the model and its report."""
-    data = load_or_collect(cells, real_like, hard, workers, progress) if cells else collect(real_like, hard, workers,
-                                                                                          progress)
+          cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS, all_grids: bool = False
+          ) -> tuple[CellModel, dict[str, object]]:
+    """Collect (or reuse ``cells``, see :func:`load_or_collect`; ``all_grids``: the cells of
+    every right hypothesis), fit, calibrate (module docstring): the model and its report."""
+    data = (load_or_collect(cells, real_like, hard, workers, progress, all_grids) if cells
+            else collect(real_like, hard, workers, progress, all_grids))
     if len(data.y) < 50:
         raise ValueError(f"{len(data.y)} cells from {data.photos} photos; expected at least 50 (render more photos)")
     rng = np.random.default_rng(seed)
@@ -295,8 +310,8 @@ def train(real_like: int = 3000, hard: int = 600, held_out: float = 0.2, workers
     rule = rule_probs(xt)
     report: dict[str, object] = {
         "photos": data.photos, "photos_with_right_grid": data.kept, "cells_train": int((~test).sum()),
-        "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "convs": list(convs), "hidden": hidden,
-        "epochs": epochs,
+        "cells_held_out": int(test.sum()), "real_like": real_like, "hard": hard, "all_grids": all_grids,
+        "convs": list(convs), "hidden": hidden, "epochs": epochs,
         "decay": decay, "rule_weight": rule_weight, "seed": seed, "temperature": round(model.temperature, 4),
         "held_out_accuracy": round(float((after.argmax(1) == yt).mean()), 5),
         "held_out_accuracy_rule": round(float((rule.argmax(1) == yt).mean()), 5),
@@ -322,7 +337,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="split and initialisation seed (default 0)")
     ap.add_argument("--cells", default=None, help="keep the collected cells in this .npz and reuse them when it "
                     "holds the same photos' (default: not kept; delete it after changing the reader)")
-    ap.add_argument("--out", default=str(SHIPPED_MODEL), help="the model file (.npz; default: the shipped one)")
+    ap.add_argument("--all-grids", action="store_true", help="keep the cells of every grid hypothesis whose grid is "
+                    "right, not only the first grid found's (the shipped ensemble's second model)")
+    ap.add_argument("--out", default=str(SHIPPED_MODEL), help="the model file (.npz; default: the shipped first-grid "
+                    "model; the every-right-grid one is vision/data/cell_model_all_grids.npz)")
     args = ap.parse_args(argv)
     for name in ("real_like", "hard", "hidden", "epochs", "workers"):
         value = getattr(args, name)
@@ -343,7 +361,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         ap.error(f"--convs {args.convs}; expected three channel counts in 1..256, like {','.join(map(str, CONVS))}")
     model, report = train(args.real_like, args.hard, workers=max(1, args.workers), hidden=max(1, args.hidden),
                           epochs=args.epochs, decay=args.decay, rule_weight=args.rule_weight, seed=args.seed,
-                          cells=args.cells, convs=convs)  # type: ignore[arg-type]
+                          cells=args.cells, convs=convs, all_grids=args.all_grids)  # type: ignore[arg-type]
     path = write_atomic(args.out, model.to_bytes(), suffixes=(".npz",), what="cell model")
     print(json.dumps(report, indent=1))
     print(f"wrote {path}")
