@@ -2,7 +2,8 @@
 
 ``python -m kinegym.agents.train_grid_arbiter`` renders photos, makes every grid hypothesis
 of each (:meth:`~kinegym.vision.board_reader.BoardReader.hypotheses`: the straight field and
-the hand-drawn '#' at three ink thresholds, cells read by the shipped cell classifier) and
+the hand-drawn '#' at three ink thresholds, cells read by the shipped cell classifier, or by
+the model(s) given with ``--model``) and
 labels a hypothesis right when its whole board reads right. It then:
 
 1. splits the photos (never the hypotheses of one photo) into training and held-out parts;
@@ -46,9 +47,10 @@ _MAX_DATA_BYTES = 1 << 28
 Photos = list[tuple[np.ndarray, np.ndarray]]  # per photo: features (k, F) and right (k,) of its hypotheses
 
 
-def _scene_hypotheses(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Render one photo and make its hypotheses: their features and whether each reads the board right."""
-    kind, seed = job
+def _scene_hypotheses(job: tuple[str, int, tuple[str, ...]]) -> tuple[np.ndarray, np.ndarray]:
+    """Render one photo and make its hypotheses (cells read by the job's models: ``()`` the
+    shipped ones): their features and whether each reads the board right."""
+    kind, seed, models = job
     if kind == "real-like":
         from kinegym.envs.sim.scenes_real import real_like_scene
 
@@ -62,7 +64,7 @@ def _scene_hypotheses(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray]:
         hs = random_scene(rng, n=n, difficulty="hard", distractors=bool(rng.random() < 0.5))
         truth, image = hs.cells, hs.photo.image
     try:
-        hyps = BoardReader(size=n, arbiter=None).hypotheses(image)
+        hyps = BoardReader(size=n, arbiter=None, model=list(models) if models else "shipped").hypotheses(image)
     except NoBoardError:
         hyps = []
     x = np.array([features(h) for h in hyps], np.float64).reshape(-1, len(FEATURES))
@@ -71,16 +73,21 @@ def _scene_hypotheses(job: tuple[str, int]) -> tuple[np.ndarray, np.ndarray]:
     return x, right
 
 
-def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True) -> Photos:
-    """The hypotheses of ``real_like`` + ``hard`` photos (module docstring), in ``workers``
-    processes; the order, and so the data, does not depend on ``workers``."""
-    jobs = [("real-like", REAL_LIKE_SEED + i) for i in range(real_like)] + [("hard", HARD_SEED + i)
-                                                                           for i in range(hard)]
+def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True, models: Sequence[str] = ()
+            ) -> Photos:
+    """The hypotheses of ``real_like`` + ``hard`` photos (module docstring; cells read by the
+    ensemble of ``models``, paths, or the shipped one), in ``workers`` processes; the order, and
+    so the data, does not depend on ``workers``."""
+    m = tuple(str(p) for p in models)
+    jobs = [("real-like", REAL_LIKE_SEED + i, m) for i in range(real_like)] + [("hard", HARD_SEED + i, m)
+                                                                              for i in range(hard)]
     return in_order(_scene_hypotheses, jobs, workers, _Ticker(len(jobs), "photos", progress))
 
 
-def _load_or_collect(path: str | None, real_like: int, hard: int, workers: int, progress: bool) -> Photos:
-    """:func:`collect`, kept in ``path`` (.npz) and read back when it holds the same photos."""
+def _load_or_collect(path: str | None, real_like: int, hard: int, workers: int, progress: bool,
+                     models: Sequence[str] = ()) -> Photos:
+    """:func:`collect`, kept in ``path`` (.npz) and read back when it holds the same photos
+    (delete it after changing the reader or the models)."""
     from kinegym.configs.io import FileError, read_bytes, write_atomic
 
     key = np.array([real_like, hard, len(FEATURES)])
@@ -93,7 +100,7 @@ def _load_or_collect(path: str | None, real_like: int, hard: int, workers: int, 
                     return [(x[photo == k], right[photo == k]) for k in range(real_like + hard)]
         except (KeyError, ValueError, OSError, EOFError) as err:
             raise FileError(Path(path), f"not a hypotheses file ({err})", "an .npz written by --data") from None
-    photos = collect(real_like, hard, workers, progress)
+    photos = collect(real_like, hard, workers, progress, models)
     if path is not None:
         buf = io.BytesIO()
         np.savez_compressed(buf, key=key, x=np.concatenate([x for x, _ in photos]),
@@ -144,9 +151,10 @@ def choose(photos: Photos, arbiter: GridArbiter | None, accept: float = 1.0) -> 
 
 
 def train(real_like: int, hard: int, workers: int = 2, l2: float = 1e-2, seed: int = 0, data: str | None = None,
-          progress: bool = True) -> tuple[GridArbiter, dict[str, object]]:
-    """Collect, split, fit, pick ``accept`` (module docstring); the arbiter and its report."""
-    photos = _load_or_collect(data, real_like, hard, workers, progress)
+          progress: bool = True, models: Sequence[str] = ()) -> tuple[GridArbiter, dict[str, object]]:
+    """Collect (cells read by ``models``, or the shipped ensemble), split, fit, pick ``accept``
+    (module docstring); the arbiter and its report."""
+    photos = _load_or_collect(data, real_like, hard, workers, progress, models)
     order = np.random.default_rng(seed).permutation(len(photos))
     cut = int(round(0.75 * len(photos)))
     train_p, held = [photos[k] for k in order[:cut]], [photos[k] for k in order[cut:]]
@@ -168,7 +176,7 @@ def train(real_like: int, hard: int, workers: int = 2, l2: float = 1e-2, seed: i
         "held_out_boards_right": {"first_grid_found": first, "arbiter": chosen, "arbiter_making_all": full,
                                   "oracle": oracle},
         "hypotheses_made_per_photo": {"first_grid_found": round(made_first, 3), "arbiter": round(made, 3)},
-        "kinds": list(KINDS)}
+        "kinds": list(KINDS), "models": [Path(p).name for p in models] or "shipped"}
     arbiter.info = report
     return arbiter, report
 
@@ -183,6 +191,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="split seed (default 0)")
     ap.add_argument("--data", default=None, help="keep the collected hypotheses in this .npz and reuse them "
                     "(default: not kept)")
+    ap.add_argument("--model", action="append", default=[], metavar="NPZ",
+                    help="a cell model whose calls the arbiter learns (repeat for an ensemble; default: the shipped "
+                    "ensemble)")
     ap.add_argument("--out", default=str(SHIPPED_ARBITER), help="the arbiter file (.json; default: the shipped one)")
     args = ap.parse_args(argv)
     for name in ("real_like", "hard"):
@@ -194,8 +205,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         ap.error(f"--l2 {args.l2}; expected 0..10")
     from kinegym.configs.io import write_atomic
 
+    for m in args.model:
+        if not Path(m).is_file():
+            ap.error(f"--model {m}: no such file; expected a cell model .npz (python -m kinegym.agents.train_cells)")
     arbiter, report = train(args.real_like, args.hard, args.workers, args.l2, args.seed, args.data,
-                            progress=True)
+                            progress=True, models=args.model)
     path = write_atomic(args.out, arbiter.to_json().encode(), suffixes=(".json",), what="grid arbiter")
     print(json.dumps(report, indent=1))
     print(f"wrote {path}")

@@ -107,12 +107,12 @@ def test_the_shipped_arbiter_reads_more_unseen_boards_than_the_first_grid_found(
     with every hypothesis made: the shipped arbiter's choice reads more boards right than the
     first grid found, and never fewer than it by more than one photo on the hard rendered boards
     where the straight field is right."""
-    real = [_scene_hypotheses(("real-like", 5_000_000 + i)) for i in range(40)]
+    real = [_scene_hypotheses(("real-like", 5_000_000 + i, ())) for i in range(40)]
     arbiter = BoardReader().arbiter
     assert arbiter is not None
     first, chosen = choose(real, None)[0], choose(real, arbiter, arbiter.accept)[0]
     assert chosen > first, (chosen, first)
-    hard = [_scene_hypotheses(("hard", 5_100_000 + i)) for i in range(12)]
+    hard = [_scene_hypotheses(("hard", 5_100_000 + i, ())) for i in range(12)]
     assert choose(hard, arbiter, arbiter.accept)[0] >= choose(hard, None)[0] - 1
 
 
@@ -137,3 +137,17 @@ def test_the_training_entry_point_writes_an_arbiter_the_reader_uses(tmp_path: Pa
     with pytest.raises(SystemExit):
         main(["--l2", "-1"])
     assert "--l2 -1.0; expected 0..10" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--model", str(tmp_path / "none.npz")])
+    assert "none.npz: no such file; expected a cell model" in capsys.readouterr().err
+
+
+def test_the_arbiter_learns_the_calls_of_the_models_it_is_given() -> None:
+    """``--model``: the hypotheses' features come from the cells as the given model reads them
+    (the shipped ensemble's second member alone here), not from the shipped ensemble's."""
+    from kinegym.vision.cell_model import SHIPPED_MODELS
+
+    own = [_scene_hypotheses(("real-like", 5_000_000 + i, (str(SHIPPED_MODELS[1]),)))[0] for i in range(3)]
+    shipped = [_scene_hypotheses(("real-like", 5_000_000 + i, ()))[0] for i in range(3)]
+    assert [a.shape for a in own] == [b.shape for b in shipped]
+    assert any(not np.array_equal(a, b) for a, b in zip(own, shipped))
