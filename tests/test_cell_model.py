@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from kinegym.agents.train_cells import (
+    collect,
     expected_calibration_error,
     fit,
     fit_temperature,
@@ -21,7 +22,16 @@ from kinegym.agents.train_cells import (
 from kinegym.configs.io import FileError
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader, NoBoardError, VisionError
-from kinegym.vision.cell_model import N_CHANNELS, N_INPUTS, WIN, CellModel, cell_inputs, channels
+from kinegym.vision.cell_model import (
+    N_CHANNELS,
+    N_INPUTS,
+    SHIPPED_MODELS,
+    WIN,
+    CellEnsemble,
+    CellModel,
+    cell_inputs,
+    channels,
+)
 from kinegym.vision.cells import _probabilities, board_features
 
 S, O = 40, 20  # rectified cell and margin (px), as the reader uses
@@ -132,22 +142,39 @@ def test_fit_learns_x_from_o_and_is_reproducible() -> None:
 
 def test_collected_cells_are_kept_and_reused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """``--cells``: the first call collects and writes, the second with the same photos reads the
-    file back (no photo rendered), other counts collect anew, and a file that is not a cache is
-    named."""
+    file back (no photo rendered), other counts and a cache of the other kind (first grids
+    against every right grid, or from before ``all_grids`` was kept) collect anew, and a file
+    that is not a cache is named. With ``all_grids`` a photo gives the cells of each of its
+    hypotheses whose grid is right (whole boards, the same truth); without, of its first grid."""
     cache = tmp_path / "cells.npz"
-    first = load_or_collect(cache, 4, 1, workers=1, progress=False)
+    first = load_or_collect(cache, 4, 1, workers=1, progress=False, all_grids=True)
     assert cache.exists() and first.photos == 5
+    single = collect(4, 1, workers=1, progress=False)
+    views = {}
+    for k in np.unique(first.photo):
+        y = first.y[first.photo == k]
+        n = 9 if len(y) % 25 else 25
+        assert len(y) % n == 0 and (y.reshape(-1, n) == y[:n]).all()
+        views[int(k)] = len(y) // n
+        assert (single.photo == k).sum() in (0, n)  # one view at most: the first grid found's
+    assert max(views.values()) >= 2, views  # some photo's grid is found right by more than one hypothesis
     import kinegym.agents.train_cells as tc
 
     def no_render(*args: object, **kwargs: object) -> None:
         raise AssertionError("collected again although the cache holds these photos")
 
     monkeypatch.setattr(tc, "collect", no_render)
-    again = load_or_collect(cache, 4, 1, workers=1, progress=False)
+    again = load_or_collect(cache, 4, 1, workers=1, progress=False, all_grids=True)
     np.testing.assert_array_equal(again.x, first.x)
     np.testing.assert_array_equal(again.photo, first.photo)
+    for kwargs in ({"real_like": 5, "all_grids": True}, {"real_like": 4, "all_grids": False}):
+        with pytest.raises(AssertionError, match="collected again"):
+            load_or_collect(cache, hard=1, workers=1, progress=False, **kwargs)  # type: ignore[arg-type]
+    with np.load(cache) as z:  # the same photos' cells as an older trainer kept them (first grids)
+        old = {key: z[key] for key in z.files if key != "all_grids"}
+    np.savez(tmp_path / "old.npz", **old)
     with pytest.raises(AssertionError, match="collected again"):
-        load_or_collect(cache, 5, 1, workers=1, progress=False)
+        load_or_collect(tmp_path / "old.npz", 4, 1, workers=1, progress=False, all_grids=True)
     (tmp_path / "bad.npz").write_bytes(b"not a zip")
     with pytest.raises(FileError, match="bad.npz"):
         load_or_collect(tmp_path / "bad.npz", 4, 1, workers=1, progress=False)
@@ -217,3 +244,26 @@ def test_the_shipped_model_beats_the_rule_on_unseen_real_like_photos() -> None:
             truth.append(sc.cells.reshape(-1))
     assert hits_model > hits_rule, (hits_model, hits_rule)
     assert expected_calibration_error(np.concatenate(probs), np.concatenate(truth)) <= 0.06
+
+
+def test_the_shipped_ensemble_averages_its_members(tmp_path: Path) -> None:
+    """The reader's default model is the ensemble of :data:`SHIPPED_MODELS` (the first-grid and the
+    every-right-grid model, the second trained with ``--all-grids``); its probabilities are the
+    mean of its members', a list of paths makes one, and a bad member is named."""
+    reader = BoardReader()
+    assert isinstance(reader.model, CellEnsemble) and len(reader.model.members) == 2
+    first, every = (CellModel.load(p) for p in SHIPPED_MODELS)
+    assert every.describe()["all_grids"] is True and not first.describe().get("all_grids", False)
+    trace: dict[str, object] = {}
+    reader.read(real_like_scene(20_000).image, trace)
+    x = np.asarray(trace["cell_inputs"])
+    got = reader.model.probs(x)
+    np.testing.assert_allclose(got, 0.5 * (first.probs(x) + every.probs(x)), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.sum(axis=1), 1.0, atol=1e-9)
+    assert not np.allclose(first.probs(x), every.probs(x))  # two models, not one twice
+    assert isinstance(BoardReader(model=[str(p) for p in SHIPPED_MODELS]).model, CellEnsemble)
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(VisionError, match="bad.npz"):
+        BoardReader(model=[str(SHIPPED_MODELS[0]), str(tmp_path / "bad.npz")])
+    with pytest.raises(VisionError, match="no models"):
+        CellEnsemble(())

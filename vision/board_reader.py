@@ -60,12 +60,12 @@ No board in the image raises :class:`NoBoardError` (with the reason), never a gu
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 import cv2
 import numpy as np
 
-from .cell_model import SHIPPED_MODEL, CellModel, cell_inputs
+from .cell_model import CellEnsemble, CellModel, cell_inputs, load_cell_model
 from .cells import _probabilities, _remove_grid_lines, board_features
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
@@ -111,14 +111,14 @@ class BoardReader:
         cell_px: side of a rectified cell (px) for the cell features.
         max_side_px: larger images are shrunk to this longer side first (speed).
         grid_px: the grid is searched on a copy shrunk to about this longer side.
-        model: the cell classifier - a :class:`CellModel`, the path of one, ``"shipped"``
-            (the package's) or None for the hand rule alone.
+        model: the cell classifier - a :class:`CellModel` or :class:`CellEnsemble`, a model's path, a
+            list of paths (their ensemble), ``"shipped"`` (the package's ensemble) or None (the hand rule).
         arbiter: what chooses among grid hypotheses - a :class:`GridArbiter`, the path of one,
             ``"shipped"`` or None for the first grid found.
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
-                 grid_px: int = 400, model: CellModel | str | None = "shipped",
+                 grid_px: int = 400, model: CellModel | CellEnsemble | str | Sequence[str] | None = "shipped",
                  arbiter: GridArbiter | str | None = "shipped") -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
@@ -130,11 +130,11 @@ class BoardReader:
         self.cell_px = int(cell_px)
         self.max_side_px = int(max_side_px)
         self.grid_px = int(grid_px)
-        if model is not None and not isinstance(model, CellModel):
+        if model is not None and not isinstance(model, (CellModel, CellEnsemble)):
             if self.cell_px != 40:  # the shipped model was trained on 40 px cells
                 raise VisionError(f"cell_px={cell_px!r} with a trained cell model; the model reads 40 px cells "
                                   "(pass model=None for the hand rule at other sizes)")
-            model = CellModel.load(SHIPPED_MODEL if model == "shipped" else model)
+            model = load_cell_model(model)
         self.model = model
         if arbiter is not None and not isinstance(arbiter, GridArbiter):
             arbiter = GridArbiter.load(SHIPPED_ARBITER if arbiter == "shipped" else arbiter)

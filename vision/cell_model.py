@@ -24,12 +24,19 @@ log-probabilities is added - a prior that keeps the rule's say where the network
 seen rendered photos only, is unsure - and a softmax gives the probabilities.
 :mod:`kinegym.agents.train_cells` trains it (in torch) on the rendered real-like and hard sets;
 reading needs numpy only. The file records how it was trained (``info``).
+
+The reader's default is a :class:`CellEnsemble` of two such networks (:data:`SHIPPED_MODELS`):
+one trained on the cells of the first grid found, one on the cells of every grid hypothesis
+whose grid is right (``train_cells --all-grids``); their probabilities are averaged. The second
+reads more rendered real-like boards, the first is surer of the real photos' looped marks
+(``bench/README.md``); together they keep the real photos and gain on the rendered ones.
 """
 
 from __future__ import annotations
 
 import io
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,8 +48,8 @@ from kinegym.configs.io import read_bytes
 
 from .errors import VisionError
 
-__all__ = ["WIN", "N_CHANNELS", "N_SCALARS", "N_INPUTS", "CellModel", "cell_inputs", "channels", "rule_probs",
-           "SHIPPED_MODEL"]
+__all__ = ["WIN", "N_CHANNELS", "N_SCALARS", "N_INPUTS", "CellModel", "CellEnsemble", "cell_inputs", "channels",
+           "rule_probs", "load_cell_model", "SHIPPED_MODEL", "SHIPPED_MODELS"]
 
 #: side of a cell's window (px) as the network sees it
 WIN = 32
@@ -55,6 +62,8 @@ _RULE = WIN * WIN + 7  # where the rule's probabilities start
 N_CHANNELS = 3
 #: the model the reader uses by default
 SHIPPED_MODEL = Path(__file__).with_name("data") / "cell_model.npz"
+#: the ensemble the reader uses by default: the first-grid model and the every-right-grid one
+SHIPPED_MODELS = (SHIPPED_MODEL, SHIPPED_MODEL.with_name("cell_model_all_grids.npz"))
 _MAX_BYTES = 8 << 20
 _ARRAYS = ("cmean", "cscale", "smean", "sscale", "k1", "b1", "k2", "b2", "k3", "b3", "w4", "b4", "w5", "b5")
 
@@ -209,6 +218,41 @@ class CellModel:
     def describe(self) -> dict[str, object]:
         """The training record stored with the model."""
         return dict(json.loads(self.info))
+
+
+@dataclass
+class CellEnsemble:
+    """Several :class:`CellModel` read alike: :meth:`probs` is the mean of theirs (each calibrated
+    on its own, so the mean is a mixture of calibrated forecasts)."""
+
+    members: tuple[CellModel, ...]
+
+    def __post_init__(self) -> None:
+        if not self.members:
+            raise VisionError("a cell ensemble of no models; expected at least one CellModel")
+
+    def probs(self, x: np.ndarray) -> np.ndarray:
+        """``(N, 3)`` the members' probabilities of empty / X / O, averaged."""
+        return sum(m.probs(x) for m in self.members) / len(self.members)  # type: ignore[return-value]
+
+    @classmethod
+    def load(cls, paths: tuple[str | Path, ...] | list[str | Path] = SHIPPED_MODELS) -> CellEnsemble:
+        """The models saved at ``paths`` (:meth:`CellModel.load` each; its errors name the file)."""
+        return cls(tuple(CellModel.load(p) for p in paths))
+
+    def describe(self) -> list[dict[str, object]]:
+        """Each member's training record."""
+        return [m.describe() for m in self.members]
+
+
+def load_cell_model(spec: str | Path | Sequence[str | Path]) -> CellModel | CellEnsemble:
+    """``"shipped"``: the package's ensemble (:data:`SHIPPED_MODELS`); a list or tuple of paths:
+    their ensemble; a path: that model."""
+    if isinstance(spec, str) and spec == "shipped":
+        return CellEnsemble.load(SHIPPED_MODELS)
+    if isinstance(spec, (list, tuple)):
+        return CellEnsemble.load(list(spec))
+    return CellModel.load(spec)  # type: ignore[arg-type]
 
 
 def _shape_problem(a: dict[str, np.ndarray]) -> str:
