@@ -67,6 +67,7 @@ import numpy as np
 
 from .cell_model import CellEnsemble, CellModel, cell_inputs, load_cell_model
 from .cells import _probabilities, _remove_grid_lines, board_features
+from .counts import count_rule, most_probable_board
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
 from .grid_choice import KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
@@ -88,19 +89,8 @@ from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_colour, ink_map, no
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
 
-__all__ = [
-    "EMPTY",
-    "X",
-    "O",
-    "BoardReading",
-    "BoardReader",
-    "ThresholdReader",
-    "NoBoardError",
-    "VisionError",
-    "ink_map",
-    "board_features",
-    "debug_image",
-]
+__all__ = ["EMPTY", "X", "O", "BoardReading", "BoardReader", "ThresholdReader", "NoBoardError", "VisionError",
+           "ink_map", "board_features", "debug_image"]
 
 
 class BoardReader:
@@ -115,11 +105,15 @@ class BoardReader:
             list of paths (their ensemble), ``"shipped"`` (the package's ensemble) or None (the hand rule).
         arbiter: what chooses among grid hypotheses - a :class:`GridArbiter`, the path of one,
             ``"shipped"`` or None for the first grid found.
+        counts: the X and O counts a board may have (:data:`~kinegym.vision.counts.COUNT_RULES`):
+            ``"alternate"`` (players take turns), ``"x-first"``, ``"o-first"`` or ``"any"`` (each
+            cell's own most probable call); a reading that breaks the rule becomes the most
+            probable board that keeps it (:func:`~kinegym.vision.counts.most_probable_board`).
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
                  grid_px: int = 400, model: CellModel | CellEnsemble | str | Sequence[str] | None = "shipped",
-                 arbiter: GridArbiter | str | None = "shipped") -> None:
+                 arbiter: GridArbiter | str | None = "shipped", counts: str = "alternate") -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
@@ -139,6 +133,8 @@ class BoardReader:
         if arbiter is not None and not isinstance(arbiter, GridArbiter):
             arbiter = GridArbiter.load(SHIPPED_ARBITER if arbiter == "shipped" else arbiter)
         self.arbiter = arbiter
+        count_rule(counts)  # an unknown rule is named here
+        self.counts = counts
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
@@ -160,7 +156,8 @@ class BoardReader:
         if trace is not None:
             trace.update(best.trace)
             trace["hypotheses"] = [(h.kind, h.p) for h in made]
-        cells, conf = best.probs.argmax(axis=-1), best.probs.max(axis=-1)
+        cells = most_probable_board(best.probs, self.counts)
+        conf = np.take_along_axis(best.probs, cells[..., None], axis=-1)[..., 0]
         scale, H, err = best.scale, best.H, best.err
         if scale < 1.0:
             H = np.diag([1 / scale, 1 / scale, 1.0]) @ H

@@ -99,7 +99,7 @@ def cmd_read_board(args: argparse.Namespace) -> int:
 
     path = Path(args.image)
     rgb = read_image(path)
-    reader = BoardReader(size=args.size)
+    reader = BoardReader(size=args.size, counts=args.counts)
     trace: dict[str, object] = {}
     t0 = time.perf_counter()
     try:
@@ -157,6 +157,9 @@ def add_parsers(sub: Any) -> None:
     rb = sub.add_parser("read-board", help="read a tic-tac-toe board from a photo (X, O or empty per cell)")
     rb.add_argument("image", help="image file (PNG, JPEG, ...)")
     rb.add_argument("--size", type=int, choices=(3, 5), default=None, help="board size (default: decide)")
+    rb.add_argument("--counts", choices=("alternate", "x-first", "o-first", "any"), default="alternate",
+                    help="X and O counts the board may have: players took turns (default), X or O began, or any "
+                         "(each cell's own most probable call)")
     rb.add_argument("--debug", default=None, help="write a PNG showing the found grid and each cell's call")
     add_json(rb)
     rb.set_defaults(func=cmd_read_board)
