@@ -15,7 +15,7 @@ import pytest
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.image_io import read_image
-from kinegym.vision.ink import NOISY_SIGMA, noise_sigma
+from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_threshold, noise_sigma
 
 DATA = Path(__file__).parent / "data" / "real"
 LABELS = json.loads((DATA / "labels.json").read_text())["boards"]
@@ -93,6 +93,40 @@ def test_the_noise_estimate_follows_the_noise() -> None:
     est = [noise_sigma(noisy(img, s, 0) if s else img) for s in (0, 4, 8, 12)]
     assert est[0] < 1.0 and all(a < b for a, b in zip(est, est[1:])), est
     assert 2.0 < est[1] < 3.5 and 4.5 < est[2] < 6.5 and 6.5 < est[3] < 9.5, est
+
+
+def test_the_noise_floor_never_hides_ink_half_as_dark_as_the_strongest() -> None:
+    """Dense rules (or heavy noise) spread a darkness map's middle: six robust sigmas above its
+    median rose above the drawn lines. The floor is capped at half the strongest ink; where
+    ink is sparse the cap does not bite."""
+    rng = np.random.default_rng(3)
+    d = (0.05 + np.abs(rng.normal(0.0, 0.02, (400, 400)))).astype(np.float32)
+    sparse = d.copy()
+    sparse[100:104, 50:350] = 0.64  # one dark stroke on clean paper
+    t = ink_threshold(sparse, 0.0)
+    assert t == pytest.approx(np.median(sparse[::2, ::2]) + 6 * 1.4826 * np.median(
+        np.abs(sparse[::2, ::2] - np.median(sparse[::2, ::2]))), rel=1e-6) and t < 0.2
+    ruled = d.copy()
+    rules = rng.random(d.shape) < 0.55
+    ruled[rules] = rng.uniform(0.1, 0.55, int(rules.sum()))
+    ruled[200:203, 40:360] = 0.45  # a drawn line, as dark as the darker rules
+    ruled[:, 300:304] = 0.64  # the strongest strokes
+    sample = ruled[::2, ::2]
+    floor = np.median(sample) + 6 * 1.4826 * np.median(np.abs(sample - np.median(sample)))
+    top = float(np.percentile(sample, 99.7))
+    t = ink_threshold(ruled, 0.0)
+    assert floor > 0.45 and t == pytest.approx(NOISE_FLOOR_CAP * top) and t < 0.45, (floor, t, top)
+
+
+def test_a_noisy_empty_grid_and_dense_graph_rules_are_read() -> None:
+    """With the floor capped: real photo 9 (an empty grid in thin teal) with white noise of 12
+    grey levels reads as an empty board (it was refused), and real-like photo 20,109 (a teal
+    '#' on graph paper at 520 px, its rules all over the photo) reads right (it was refused)."""
+    img = noisy(read_image(DATA / "kvuletic2_image9.jpeg"), 12.0, 100 + sorted(LABELS).index("kvuletic2_image9.jpeg"))
+    assert BoardReader(size=3).read(img).text() == LABELS["kvuletic2_image9.jpeg"] == "...|...|..."
+    sc = real_like_scene(20_109)
+    assert sc.notes["surface"] == "graph" and sc.image.shape[1] == 520
+    assert BoardReader(size=3).read(sc.image).text() == sc.text()
 
 
 def keystoned(img: np.ndarray) -> np.ndarray:
