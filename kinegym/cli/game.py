@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit
+from kinegym.vision.counts import COUNT_RULES  # numpy only: the parser names the rules
 
 __all__ = ["add_parsers", "cmd_solve", "cmd_match", "cmd_read_board"]
 
@@ -157,7 +158,7 @@ def add_parsers(sub: Any) -> None:
     rb = sub.add_parser("read-board", help="read a tic-tac-toe board from a photo (X, O or empty per cell)")
     rb.add_argument("image", help="image file (PNG, JPEG, ...)")
     rb.add_argument("--size", type=int, choices=(3, 5), default=None, help="board size (default: decide)")
-    rb.add_argument("--counts", choices=("alternate", "x-first", "o-first", "any"), default="alternate",
+    rb.add_argument("--counts", choices=tuple(COUNT_RULES), default="alternate",
                     help="X and O counts the board may have: players took turns (default), X or O began, or any "
                          "(each cell's own most probable call)")
     rb.add_argument("--debug", default=None, help="write a PNG showing the found grid and each cell's call")
