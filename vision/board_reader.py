@@ -141,8 +141,9 @@ class BoardReader:
 
         ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
         in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
-        :func:`debug_image`, ``trace["hypotheses"]``: each grid tried, (kind, probability), and
-        ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``)."""
+        :func:`debug_image`, ``trace["hypotheses"]``: each grid tried, (kind, probability),
+        ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``), and
+        ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise."""
         made, reasons = [], []
         for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
@@ -158,6 +159,8 @@ class BoardReader:
             trace["hypotheses"] = [(h.kind, h.p) for h in made]
         cells = most_probable_board(best.probs, self.counts)
         conf = np.take_along_axis(best.probs, cells[..., None], axis=-1)[..., 0]
+        if trace is not None:  # the cells the count rule called otherwise than their own most probable call
+            trace["count_changed"] = [(int(r), int(c)) for r, c in np.argwhere(cells != best.probs.argmax(axis=-1))]
         scale, H, err = best.scale, best.H, best.err
         if scale < 1.0:
             H = np.diag([1 / scale, 1 / scale, 1.0]) @ H

@@ -16,7 +16,8 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
                 error: str | None = None) -> np.ndarray:
     """An RGB picture of what the reader did: the straight lines it found (columns red,
     rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
-    each cell's call with its confidence - or, without a board, the reason in red."""
+    each cell's call with its confidence (orange with a star where the count rule called the cell
+    otherwise than its own most probable call) - or, without a board, the reason in red."""
     img = _as_rgb(image).copy()
     k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
     for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
@@ -37,6 +38,7 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
             cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
     if reading is not None:
         n, H = reading.n, reading.homography
+        changed_cells = {tuple(rc) for rc in trace.get("count_changed", [])}  # type: ignore[attr-defined]
         for i in range(n + 1):
             for a, b in (((i, 0), (i, n)), ((0, i), (n, i))):
                 p = np.rint(_apply(H, np.array([a, b], float))).astype(int)
@@ -45,8 +47,9 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
             for c in range(n):
                 p = np.rint(_apply(H, np.array([[c + 0.5, r + 0.5]]))).astype(int)[0]
                 label = f"{_SYMBOL[int(reading.cells[r, c])]}{reading.confidence[r, c]:.2f}"
-                cv2.putText(img, label, (p[0] - 16, p[1] + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.38, (0, 120, 0), 1,
-                            cv2.LINE_AA)
+                changed = (r, c) in changed_cells  # called so by the count rule: orange
+                cv2.putText(img, label + "*" * changed, (p[0] - 16, p[1] + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.38,
+                            (230, 120, 0) if changed else (0, 120, 0), 1, cv2.LINE_AA)
     if error:
         cv2.putText(img, error[:90], (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0), 1, cv2.LINE_AA)
     return img

@@ -119,11 +119,16 @@ def cmd_read_board(args: argparse.Namespace) -> int:
             f"{r.grid_points} crossings; lowest cell confidence {r.confidence.min():.2f})"]
     text += ["  " + " ".join(row) for row in rows]
     text.append(f"text form: {r.text()}")
+    changed = [list(rc) for rc in trace.get("count_changed", [])]  # type: ignore[attr-defined]
+    if changed:
+        text.append(f"count rule ({args.counts}): called otherwise than their own most probable call: "
+                    + ", ".join(f"row {rc[0]} column {rc[1]}" for rc in changed) + " (--counts any reads each alone)")
     if args.debug:
         text.append(f"debug picture: {args.debug}")
     emit(args, {"size": r.n, "board": r.text(), "cells": r.cells.tolist(),
                  "confidence": np.round(r.confidence, 4).tolist(), "corners_px": np.round(r.corners(), 2).tolist(),
-                 "grid_error_px": r.grid_error_px, "frame": list(r.frame), "ms": ms, "debug": args.debug},
+                 "grid_error_px": r.grid_error_px, "frame": list(r.frame), "ms": ms, "debug": args.debug,
+                 "count_changed": changed},
           "\n".join(text))
     return EXIT_OK
 
