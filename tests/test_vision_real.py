@@ -213,3 +213,15 @@ def test_a_ruling_with_no_straight_runs_reads_without_numeric_warnings() -> None
             BoardReader(size=3, model=None).read(sc.image)
         except NoBoardError:
             pass
+
+
+def test_a_degenerate_lattice_fit_is_no_grid_and_no_warning() -> None:
+    """Real-like photo 1,000,443 (a cell-classifier training photo): a straight-field lattice refitted
+    to its crossings put them at infinity (numpy's "divide by zero" on every read). Such a fit is
+    no lattice now: no warning, the straight field refused, and the '#' reads the board."""
+    sc = real_like_scene(1_000_443)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        made = BoardReader(size=3, model=None, arbiter=None).hypotheses(sc.image)
+        assert "straight" not in [h.kind for h in made] and made
+        assert BoardReader(size=3).read(sc.image).text() == sc.text()

@@ -120,10 +120,7 @@ class BoardReader:
             raise VisionError(f"cell_px={cell_px!r}; expected 12..200 pixels per rectified cell")
         if min(int(max_side_px), int(grid_px)) < 64:
             raise VisionError(f"max_side_px={max_side_px!r}, grid_px={grid_px!r}; expected at least 64 pixels each")
-        self.size = size
-        self.cell_px = int(cell_px)
-        self.max_side_px = int(max_side_px)
-        self.grid_px = int(grid_px)
+        self.size, self.cell_px, self.max_side_px, self.grid_px = size, int(cell_px), int(max_side_px), int(grid_px)
         if model is not None and not isinstance(model, (CellModel, CellEnsemble)):
             if self.cell_px != 40:  # the shipped model was trained on 40 px cells
                 raise VisionError(f"cell_px={cell_px!r} with a trained cell model; the model reads 40 px cells "
@@ -154,12 +151,11 @@ class BoardReader:
                 trace["hypotheses"] = []
             raise NoBoardError("; ".join(reasons))
         best = max(made, key=lambda h: h.p)
-        if trace is not None:
-            trace.update(best.trace)
-            trace["hypotheses"] = [(h.kind, h.p) for h in made]
         cells = most_probable_board(best.probs, self.counts)
         conf = np.take_along_axis(best.probs, cells[..., None], axis=-1)[..., 0]
-        if trace is not None:  # the cells the count rule called otherwise than their own most probable call
+        if trace is not None:  # count_changed: the cells the count rule called otherwise than their own call
+            trace.update(best.trace)
+            trace["hypotheses"] = [(h.kind, h.p) for h in made]
             trace["count_changed"] = [(int(r), int(c)) for r, c in np.argwhere(cells != best.probs.argmax(axis=-1))]
         scale, H, err = best.scale, best.H, best.err
         if scale < 1.0:
@@ -436,25 +432,29 @@ class BoardReader:
 
     @staticmethod
     def _refine_lattice(H: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
-        for _ in range(2):  # refine on the inliers, re-assign
+        """``H`` refitted to the crossings ``P`` on it; None when under four are or the fit is degenerate."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for _ in range(2):  # refine on the inliers, re-assign
+                L = _apply(np.linalg.inv(H), P)
+                R = np.rint(L)
+                inl = np.all(np.abs(L - R) < 0.2, axis=1)
+                if inl.sum() < 4:
+                    break
+                Hn, _ = cv2.findHomography(R[inl], P[inl], 0)
+                if Hn is None or not np.all(np.isfinite(Hn)):
+                    break
+                H = Hn
             L = _apply(np.linalg.inv(H), P)
             R = np.rint(L)
             inl = np.all(np.abs(L - R) < 0.2, axis=1)
             if inl.sum() < 4:
-                break
-            Hn, _ = cv2.findHomography(R[inl], P[inl], 0)
-            if Hn is None or not np.all(np.isfinite(Hn)):
-                break
-            H = Hn
-        L = _apply(np.linalg.inv(H), P)
-        R = np.rint(L)
-        inl = np.all(np.abs(L - R) < 0.2, axis=1)
-        if inl.sum() < 4:
+                return None
+            res = _apply(H, R[inl]) - P[inl]
+        err = float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
+        if not math.isfinite(err):  # points at infinity: no lattice (and no warning)
             return None
-        ij = R[inl].astype(np.int64)
-        nodes = np.array(sorted(set(map(tuple, ij.tolist()))), dtype=np.int64)
-        res = _apply(H, R[inl]) - P[inl]
-        return H, nodes, float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))))
+        nodes = np.array(sorted(set(map(tuple, R[inl].astype(np.int64).tolist()))), dtype=np.int64)
+        return H, nodes, err
 
     @staticmethod
     def _score_lattices(Hinv: np.ndarray, P: np.ndarray) -> np.ndarray:
