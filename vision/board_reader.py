@@ -432,7 +432,7 @@ class BoardReader:
 
     @staticmethod
     def _refine_lattice(H: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
-        """``H`` refitted to the crossings ``P`` on it; None when under four are or the fit is degenerate."""
+        """``H`` refitted to the crossings ``P``; None when under four lie on it or the fit is degenerate."""
         with np.errstate(divide="ignore", invalid="ignore"):
             for _ in range(2):  # refine on the inliers, re-assign
                 L = _apply(np.linalg.inv(H), P)
