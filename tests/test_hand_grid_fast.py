@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinegym.vision import hand_grid, polylines
+from kinegym.vision import hand_grid, ink, polylines
 
 
 def _runs(mask: np.ndarray) -> list[int]:
@@ -30,7 +30,7 @@ def test_stroke_width_is_the_median_run(seed: int) -> None:
     mask = (rng.random((37, 53)) < rng.uniform(0.1, 0.7)).astype(np.uint8)
     mask[0, 0] = seed % 2  # a run that starts at the very first pixel, or not
     want = [float(np.median(_runs(m))) for m in (mask, mask.T)]
-    assert hand_grid._stroke_width(mask) == max(1.0, min(want))
+    assert ink._stroke_width(mask) == max(1.0, min(want))
 
 
 def _first_crossing(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] | None:
@@ -86,12 +86,12 @@ def test_directions_equal_the_one_pass_energy(seed: int) -> None:
     ys, xs = np.nonzero(mask)
     th = np.radians(np.arange(0, 180, 2))
     proj = np.outer(np.cos(th), xs) + np.outer(np.sin(th), ys)
-    binw = max(2.0, hand_grid._stroke_width(mask))
+    binw = max(2.0, ink._stroke_width(mask))
     b = ((proj - proj.min(axis=1, keepdims=True)) / binw).astype(np.intp)
     energy = np.array([(np.bincount(row).astype(np.float64) ** 2).sum() for row in b])
     energy = np.convolve(np.concatenate([energy[-2:], energy, energy[:2]]), [0.25, 0.5, 1.0, 0.5, 0.25], "same")[2:-2]
     i = int(np.argmax(energy))
-    phi_a, _ = hand_grid._directions(mask, hand_grid._stroke_width(mask))[0]
+    phi_a, _ = hand_grid._directions(mask, ink._stroke_width(mask))[0]
     assert phi_a == float(np.mod(th[i] + np.pi / 2, np.pi))
 
 

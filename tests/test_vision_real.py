@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from kinegym.envs.sim.scenes_real import real_like_scene
+from kinegym.vision import ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.image_io import read_image
-from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_threshold, noise_sigma
+from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
 
 DATA = Path(__file__).parent / "data" / "real"
 LABELS = json.loads((DATA / "labels.json").read_text())["boards"]
@@ -116,6 +117,38 @@ def test_the_noise_floor_never_hides_ink_half_as_dark_as_the_strongest() -> None
     top = float(np.percentile(sample, 99.7))
     t = ink_threshold(ruled, 0.0)
     assert floor > 0.45 and t == pytest.approx(NOISE_FLOOR_CAP * top) and t < 0.45, (floor, t, top)
+
+
+def test_the_page_s_own_noise_floor_where_a_textured_table_raises_the_whole_map_s() -> None:
+    """A textured table beside the page spreads the whole map's darkness: its one noise floor
+    lies above a faint line on the quiet page. Each region's own floor lets the line in there,
+    and is never above the whole map's anywhere (the table's texture stays out)."""
+    rng = np.random.default_rng(5)
+    d = (0.01 + np.abs(rng.normal(0.0, 0.004, (300, 400)))).astype(np.float32)  # the page
+    d[:, :240] = np.abs(rng.normal(0.0, 0.1, (300, 240)))  # wood grain, cloth: the table
+    d[150:152, 270:390] = 0.07  # a pencil line on the page
+    d[40:46, 280:330] = 0.4  # the darkest strokes: a pen lying on the page
+    whole = ink_threshold(d, 0.0)
+    local = local_ink_threshold(d, 0.0)
+    assert whole > 0.07 and local.shape == d.shape and float(local.max()) <= whole + 1e-7
+    assert float(local[100:200, 280:380].max()) < 0.07 < float(local[:, :150].min())
+    whole_mask = ink_mask(d, 0.0)[0]
+    mask, t, _ = ink_mask(d, 0.0, local=True)
+    assert mask[150, 280:380].all() and not whole_mask[150, 280:380].any() and isinstance(t, np.ndarray)
+    assert np.array_equal(mask[:, :150], whole_mask[:, :150])  # on the table: the same mask
+
+
+def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Real-like photo 30,097 (an empty pencil '#' on a page, a pen lying on it, the table's texture
+    around): no ink above the whole photo's noise forms a '#' - it was refused - but the page's own
+    noise floor finds it."""
+    sc = real_like_scene(30_097)
+    trace: dict[str, object] = {}
+    assert BoardReader(size=3).read(sc.image, trace).text() == sc.text() == "...|...|..."
+    assert [k for k, _ in trace["hypotheses"]] == ["hash 0%"]  # type: ignore[union-attr]
+    monkeypatch.setattr(ink, "local_ink_threshold", lambda d, share: np.full(d.shape, ink_threshold(d, share)))
+    with pytest.raises(NoBoardError):
+        BoardReader(size=3).read(sc.image)
 
 
 def test_a_noisy_empty_grid_and_dense_graph_rules_are_read() -> None:

@@ -7,8 +7,9 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
 1. **Ink mask, adaptive.** A pixel is ink when it is darker than its background by more
    than the image's own noise (a robust spread of the darkness over the whole image, which
    is mostly paper) and than a share of its strongest strokes: pale ballpoint and light
-   marker next to nothing darker are kept, paper texture is not. The stroke width is
-   measured from the mask (median run across strokes).
+   marker next to nothing darker are kept, paper texture is not. Where a textured table in
+   view puts that noise above a pencil '#', the page's own noise is tried last. The stroke
+   width is measured from the mask (median run across strokes).
 2. **The two directions.** A structure-tensor orientation histogram of the ink, weighted
    by how line-like each neighbourhood is; the strongest peak is one family, the strongest
    peak 40-90 deg away the other. (Not "the longest line": long X strokes at 45 deg or a
@@ -47,11 +48,11 @@ import numpy as np
 
 from .errors import NoBoardError
 from .grid_lines import _median
-from .ink import colour_at, ink_threshold, unit
+from .ink import colour_at, ink_mask, median_at, unit
 from .polylines import extend, first_crossing, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
-__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "ink_mask", "find_hash_grid", "erase_mask", "search_copy"]
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "erase_mask", "search_copy"]
 
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
@@ -113,41 +114,6 @@ def search_copy(working: np.ndarray, photo: np.ndarray | None = None) -> np.ndar
     h, w = working.shape[:2]
     f = GRID_SIDE_PX / max(h, w)
     return cv2.resize(working, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
-
-
-def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0) -> tuple[np.ndarray, float, float]:
-    """The ink mask of a darkness map (uint8 0/1), its threshold and the stroke width (px).
-
-    The threshold is the larger of the map's noise level (median + 6 robust sigmas) and
-    ``share`` of its strong ink (the 99.7th percentile); a pixel joins the mask also at 60 % of that
-    level when it touches a pixel above it (hysteresis: a faint stretch of a line stays
-    connected)."""
-    t = max(ink_threshold(d, share), above)
-    hi = (d > t).astype(np.uint8)
-    lo = (d > 0.6 * t).astype(np.uint8)
-    # hysteresis: low pixels within a pixel of high ones
-    mask = cv2.bitwise_and(lo, cv2.dilate(hi, np.ones((3, 3), np.uint8)))
-    return mask, t, _stroke_width(mask)
-
-
-def _stroke_width(mask: np.ndarray) -> float:
-    """Median length of the mask's runs along rows and columns, the shorter of the two
-    medians (a run across a stroke is its width; one along it is long)."""
-    widths = []
-    for m in (mask, mask.T):
-        # each row with a 0 after it, the rows end to end: a run starts or ends where the
-        # value changes (one flat pass, not two 2-D nonzero calls)
-        h, w = m.shape
-        pad = np.zeros((h, w + 1), np.uint8)
-        pad[:, :w] = m
-        flat = pad.ravel()
-        edges = np.flatnonzero(flat[1:] != flat[:-1]) + 1
-        if flat[0]:
-            edges = np.concatenate([[0], edges])
-        runs = edges[1::2] - edges[0::2]
-        if len(runs):
-            widths.append(float(np.median(runs)))
-    return max(1.0, min(widths)) if widths else 2.0
 
 
 def _directions(mask: np.ndarray, width: float) -> list[tuple[float, float]]:
@@ -422,26 +388,27 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
                    share: float | None = None) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
-    threshold is ``share`` of the strongest ink (:func:`ink_mask`); by default first 22 % and,
-    when that finds no '#', all ink above the noise (pale grid lines beside black marks).
-    ``colour``, the map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets the
-    lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines."""
-    if share is not None:
-        if not 0.0 <= share < 1.0:
-            raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
-        return _find_hash_grid(d, sizes, float(share), colour)
-    try:
-        return _find_hash_grid(d, sizes, 0.22, colour)
-    except NoBoardError as first:
+    threshold is ``share`` of the strongest ink (:func:`~kinegym.vision.ink.ink_mask`); by default
+    first 22 % and, when that finds no '#', all ink above the noise (pale grid lines beside black
+    marks). All ink above the noise (share 0) that finds none is tried again above each region's
+    own noise where that is lower (a textured table around the page raises the whole map's above
+    a pencil '#'). ``colour``, the map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets
+    the lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines."""
+    if share is not None and not 0.0 <= share < 1.0:
+        raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
+    tries = [(0.22, False), (0.0, False)] if share is None else [(float(share), False)]
+    first: NoBoardError | None = None
+    for level, local in tries + ([(0.0, True)] if tries[-1][0] == 0.0 else []):
         try:
-            return _find_hash_grid(d, sizes, 0.0, colour)
-        except NoBoardError:
-            raise first from None
+            return _find_hash_grid(d, sizes, level, colour, local=local)
+        except NoBoardError as exc:
+            first = first or exc
+    raise first  # type: ignore[misc]
 
 
 def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
-                    above: float = 0.0, ruling: Ruling | None = None) -> HashGrid:
-    mask, t, width = ink_mask(d, share, above)
+                    above: float = 0.0, ruling: Ruling | None = None, local: bool = False) -> HashGrid:
+    mask, t, width = ink_mask(d, share, above, local)
     if ruling is not None and ruling.by_colour and colour is not None:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
@@ -468,7 +435,7 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
 
 
 def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
-                ruling: Ruling | None, mask: np.ndarray, traced: Callable[[float], list[Track]], t: float,
+                ruling: Ruling | None, mask: np.ndarray, traced: Callable[[float], list[Track]], t: float | np.ndarray,
                 width: float, phi_a: float, phi_b: float) -> HashGrid:
     """:func:`_find_hash_grid` for one pair of line directions (``traced``: a direction's tracks)."""
     fa, fb = traced(phi_a), traced(phi_b)
@@ -536,7 +503,8 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
         raise NoBoardError("the '#' crossings do not make a projective grid")
     p = np.concatenate([lat, np.ones((len(lat), 1))], axis=1) @ H.T
     err = float(np.sqrt(np.mean(np.sum((p[:, :2] / p[:, 2:3] - img) ** 2, axis=1))))
-    return HashGrid(n, H, cols, rows, pts, width, t, float(score), err, rules)
+    level = median_at(t, np.concatenate([tr.dense for tr in cols + rows]))  # the ink level where the '#' lies
+    return HashGrid(n, H, cols, rows, pts, width, level, float(score), err, rules)
 
 
 def _dense(tr: Track, width: float) -> np.ndarray:
