@@ -15,6 +15,8 @@ import pytest
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision import ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
+from kinegym.vision.hand_grid import HashGrid
+from kinegym.vision.hash_cells import MAX_PERSPECTIVE, affine_lattice, perspective_ratio
 from kinegym.vision.image_io import read_image
 from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
 
@@ -149,6 +151,37 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
     monkeypatch.setattr(ink, "local_ink_threshold", lambda d, share: np.full(d.shape, ink_threshold(d, share)))
     with pytest.raises(NoBoardError):
         BoardReader(size=3).read(sc.image)
+
+
+def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
+    """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
+    four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a
+    huge field, ``...|O.X|...``). Past :data:`MAX_PERSPECTIVE` the cells are read on the crossings'
+    affine fit, and the arbiter still sees the lattice as found."""
+    sc = real_like_scene(20_142)
+    trace: dict[str, object] = {}
+    reading = BoardReader(size=3).read(sc.image, trace)
+    assert reading.text() == sc.text() == "..O|X.X|..."
+    grid = trace["hash"]
+    assert perspective_ratio(grid.H, 3) > MAX_PERSPECTIVE  # type: ignore[attr-defined]
+    assert perspective_ratio(reading.homography, 3) == pytest.approx(1.0)
+    to_photo = np.linalg.inv(reading.homography) @ trace["hash_to_image"] @ affine_lattice(grid)  # type: ignore
+    assert np.allclose(to_photo / to_photo[2, 2], np.eye(3), atol=1e-6)
+
+
+def test_the_affine_lattice_of_crossings_and_the_perspective_ratio() -> None:
+    """An affine lattice has ratio 1 and is its crossings' own fit; a camera's tilt gives a ratio
+    above 1; a lattice whose horizon crosses the field has none."""
+    A = np.array([[40.0, 8.0, 100.0], [-5.0, 38.0, 60.0], [0.0, 0.0, 1.0]])
+    lat = np.array([[i + 1.0, j + 1.0] for i in range(2) for j in range(2)])
+    pts = (lat @ A[:2, :2].T + A[:2, 2]).reshape(2, 2, 2)
+    grid = HashGrid(3, A, [], [], pts, 2.0, 0.1, 1.0, 0.0)
+    assert np.allclose(affine_lattice(grid), A) and perspective_ratio(A, 3) == 1.0
+    tilted = A.copy()
+    tilted[2] = [0.0, 0.1, 1.0]  # the field's far rows deeper: 1.3 at its bottom
+    assert perspective_ratio(tilted, 3) == pytest.approx(1.3)
+    tilted[2] = [0.0, -0.5, 1.0]  # its horizon at row 2
+    assert perspective_ratio(tilted, 3) == math.inf
 
 
 def test_a_noisy_empty_grid_and_dense_graph_rules_are_read() -> None:

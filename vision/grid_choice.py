@@ -89,6 +89,14 @@ class Hypothesis:
     trace: dict[str, object] = field(default_factory=dict)
     p: float | None = None
     scale: float = 1.0
+    lattice: np.ndarray | None = None  # the crossings' own lattice, where the cells were read with another ``H``
+
+    @property
+    def found(self) -> np.ndarray:
+        """The grid's lattice as found (cells to working px): ``H``, or the crossings' own
+        projective lattice where the cells were read with its affine fit (a hand's converging
+        lines, :func:`~kinegym.vision.hash_cells.read_hash`). The arbiter's features describe it."""
+        return self.H if self.lattice is None else self.lattice
 
 
 def cell_side_px(H: np.ndarray, n: int) -> float:
@@ -101,13 +109,13 @@ def cell_side_px(H: np.ndarray, n: int) -> float:
 def features(h: Hypothesis) -> np.ndarray:
     """The hypothesis as the arbiter sees it, in the order of :data:`FEATURES`."""
     conf = h.probs.reshape(-1, 3).max(axis=1)
-    side = max(cell_side_px(h.H, h.n), 1e-6)
+    side = max(cell_side_px(h.found, h.n), 1e-6)
     kind = [float(h.kind == k) for k in KINDS]
     base = np.array([*kind, float(h.n == 5), conf.mean(), conf.min(), np.log(np.clip(conf, 1e-4, 1.0)).mean(),
                      float((h.probs.reshape(-1, 3).argmax(axis=1) > 0).mean()), h.err / side,
                      min(math.log(max(h.n * side / max(h.diag, 1.0), 1e-3)), 2.0), h.line_ref, h.coverage,
                      min(max(h.score, -1.0), 2.0),  # a '#' the search scored -inf still reads
-                     min(area_ratio(h.H, h.n), 10.0), min(wiggle(h), 2.0)])
+                     min(area_ratio(h.found, h.n), 10.0), min(wiggle(h), 2.0)])
     return with_kinds(base)
 
 
@@ -152,7 +160,7 @@ def with_kinds(base: np.ndarray) -> np.ndarray:
 
 def same_grid(a: Hypothesis, b: Hypothesis) -> bool:
     """Whether two hypotheses found the same grid (:func:`same_lattice`)."""
-    return a.n == b.n and same_lattice(a.H, b.H, a.n)
+    return a.n == b.n and same_lattice(a.found, b.found, a.n)
 
 
 def same_lattice(Ha: np.ndarray, Hb: np.ndarray, n: int) -> bool:
