@@ -15,6 +15,7 @@ import pytest
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision import ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
+from kinegym.vision.grid_choice import same_lattice
 from kinegym.vision.hand_grid import HashGrid
 from kinegym.vision.hash_cells import MAX_PERSPECTIVE, affine_lattice, perspective_ratio
 from kinegym.vision.image_io import read_image
@@ -167,6 +168,20 @@ def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     assert perspective_ratio(reading.homography, 3) == pytest.approx(1.0)
     to_photo = np.linalg.inv(reading.homography) @ trace["hash_to_image"] @ affine_lattice(grid)  # type: ignore
     assert np.allclose(to_photo / to_photo[2, 2], np.eye(3), atol=1e-6)
+
+
+def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
+    """Real-like photo 30,052: thick blue lines and pale grey marks. The straight field is found and
+    read with its fixed ink floors (two pale marks missed, p 0.22); the '#' search finds the same
+    lattice, and reading it the '#' way (the photo's own ink level, larger outer cells) reads the
+    board. It used to be passed over as a grid already made."""
+    sc = real_like_scene(30_052)
+    trace: dict[str, object] = {}
+    assert BoardReader(size=3).read(sc.image, trace).text() == sc.text() == "XXO|XOO|OX."
+    kinds = [k for k, _ in trace["hypotheses"]]  # type: ignore[union-attr]
+    assert kinds == ["straight", "hash 22%"]
+    made = BoardReader(size=3).hypotheses(sc.image)
+    assert same_lattice(made[0].found, made[1].found, 3) and made[1].p > made[0].p
 
 
 def test_the_affine_lattice_of_crossings_and_the_perspective_ratio() -> None:

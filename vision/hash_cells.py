@@ -47,7 +47,9 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
     :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its longer side (the same scale
     whatever the camera; :func:`~kinegym.vision.hand_grid.search_copy`), its ink map and
     colour - its lines erased from the ink ``d``, the cells read with the outer cells
-    reaching past the field. None, before any cell is read, when the grid is one of ``made``."""
+    reaching past the field. None, before any cell is read, when the grid is one of the '#'s
+    ``made``; a straight field on the same lattice is read again the '#' way (its cells with the
+    photo's own ink level and the larger outer cells), and the arbiter weighs both readings."""
     h, w = d.shape
     _, dg, colour = hashed
     sizes = (reader.size,) if reader.size is not None else (3, 5)
@@ -55,7 +57,7 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
     fx, fy = w / dg.shape[1], h / dg.shape[0]
     to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
     found = to_d @ grid.H
-    if any(m.n == grid.n and same_lattice(found, m.found, grid.n) for m in made):
+    if any(m.n == grid.n and m.kind != "straight" and same_lattice(found, m.found, grid.n) for m in made):
         return None
     # lines converging more than a camera's perspective does are the hand's: the outer cells
     # from the crossings' affine fit (a projective one runs off towards its horizon there)
