@@ -168,6 +168,8 @@ def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     assert perspective_ratio(reading.homography, 3) == pytest.approx(1.0)
     to_photo = np.linalg.inv(reading.homography) @ trace["hash_to_image"] @ affine_lattice(grid)  # type: ignore
     assert np.allclose(to_photo / to_photo[2, 2], np.eye(3), atol=1e-6)
+    damped = [h for h in BoardReader(size=3).hypotheses(sc.image) if h.lattice is not None]
+    assert damped and all(perspective_ratio(h.found, 3) > MAX_PERSPECTIVE > perspective_ratio(h.H, 3) for h in damped)
 
 
 def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:

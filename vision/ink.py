@@ -109,11 +109,21 @@ def ink_threshold(d: np.ndarray, share: float = 0.22) -> float:
     heavy sensor noise, spread the map's middle so far that six robust sigmas rose above the
     drawn lines themselves (real-like photo 20,109: floor 0.56, its '#' about 0.45, its darkest
     strokes 0.64); ink half as dark as the darkest strokes is ink, whatever lies around it."""
+    return _level(*_noise_floor_and_top(d), share)
+
+
+def _noise_floor_and_top(d: np.ndarray) -> tuple[float, float]:
+    """A darkness map's noise floor (median + 6 robust sigmas) and strong ink (99.7th percentile),
+    from every other pixel each way."""
     sample = d[::2, ::2].ravel()
     med = float(np.median(sample))
     mad = float(np.median(np.abs(sample - med))) * 1.4826
-    top = float(np.percentile(sample, 99.7))
-    return max(min(med + 6.0 * mad, NOISE_FLOOR_CAP * top), share * top, 0.035)
+    return med + 6.0 * mad, float(np.percentile(sample, 99.7))
+
+
+def _level(floor: float, top: float, share: float) -> float:
+    """:func:`ink_threshold` from a map's noise ``floor`` and strong ink ``top``."""
+    return max(min(floor, NOISE_FLOOR_CAP * top), share * top, 0.035)
 
 
 #: side of the blocks (px) whose own noise :func:`local_ink_threshold` measures
@@ -125,10 +135,11 @@ def local_ink_threshold(d: np.ndarray, share: float = 0.22) -> np.ndarray:
     where that is lower: each :data:`NOISE_BLOCK_PX` block's own median + 6 robust sigmas,
     interpolated between block centres. A textured table, a cloth or a wood grain around the
     page spreads the whole map's darkness and raised the one floor above pencil and faint-pen
-    lines on the plain page (real-like photos 30,011, 30,077, 30,085, 30,097 and 30,135 were
-    refused so, their '#' plain to see); the page's own floor lets them in, and the floor is
-    never raised above the whole map's (so no ink it kept is lost)."""
-    t = ink_threshold(d, share)
+    lines on the plain page (real-like photos 30,011, 30,077, 30,085 and 30,097 were refused so,
+    their '#' plain to see); the page's own floor lets them in, and the floor is never raised
+    above the whole map's (so no ink it kept is lost)."""
+    floor, top = _noise_floor_and_top(d)
+    t = _level(floor, top, share)
     sample = d[::2, ::2]
     h, w = sample.shape
     b = NOISE_BLOCK_PX // 2  # the block in the half-resolution sample
@@ -139,7 +150,6 @@ def local_ink_threshold(d: np.ndarray, share: float = 0.22) -> np.ndarray:
     med = np.median(blocks, axis=2)
     mad = np.median(np.abs(blocks - med[..., None]), axis=2) * 1.4826
     local = cv2.resize((med + 6.0 * mad).astype(np.float32), (d.shape[1], d.shape[0]), interpolation=cv2.INTER_LINEAR)
-    top = float(np.percentile(sample, 99.7))
     return np.maximum(np.minimum(local, np.float32(t)), np.float32(max(share * top, 0.035)))
 
 
