@@ -52,7 +52,7 @@ from .ink import colour_at, ink_mask, median_at, unit
 from .polylines import extend, first_crossing, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
-__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "erase_mask", "search_copy"]
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "erase_mask", "search_copy", "crossing_lattice"]
 
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
@@ -495,8 +495,7 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
         tr.dense = _dense(tr, width)
     pts = np.array([[c[0] if (c := first_crossing(extend(a.dense, ext), extend(b.dense, ext))) is not None
                       else pts[i, j] for j, b in enumerate(rows)] for i, a in enumerate(cols)])
-    k = n - 1
-    lat = np.array([[i + 1, j + 1] for i in range(k) for j in range(k)], np.float64)
+    lat = crossing_lattice(n)
     img = pts.reshape(-1, 2).astype(np.float64)
     H, _ = cv2.findHomography(lat, img, 0)
     if H is None or not np.all(np.isfinite(H)):
@@ -505,6 +504,12 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
     err = float(np.sqrt(np.mean(np.sum((p[:, :2] / p[:, 2:3] - img) ** 2, axis=1))))
     level = median_at(t, np.concatenate([tr.dense for tr in cols + rows]))  # the ink level where the '#' lies
     return HashGrid(n, H, cols, rows, pts, width, level, float(score), err, rules)
+
+
+def crossing_lattice(n: int) -> np.ndarray:
+    """``((n-1)^2, 2)`` the lattice coordinates of an ``n`` x ``n`` '#''s crossings (its lines at
+    1..n-1), in the order of :attr:`HashGrid.crossings` ``[col, row]`` flattened."""
+    return np.array([[i + 1, j + 1] for i in range(n - 1) for j in range(n - 1)], np.float64)
 
 
 def _dense(tr: Track, width: float) -> np.ndarray:

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from .grid_choice import Hypothesis, same_lattice
-from .hand_grid import HashGrid, erase_mask, find_hash_grid
+from .hand_grid import HashGrid, crossing_lattice, erase_mask, find_hash_grid
 from .ruling import clear_rules
 
 if TYPE_CHECKING:
@@ -99,8 +99,7 @@ def perspective_ratio(H: np.ndarray, n: int) -> float:
 def affine_lattice(grid: HashGrid) -> np.ndarray:
     """The least-squares affine map (3 x 3) of the lattice coordinates of ``grid``'s crossings
     (the '#' lines at 1..n-1) to their px."""
-    k = grid.n - 1
-    lat = np.array([[i + 1, j + 1, 1.0] for i in range(k) for j in range(k)])
-    A = np.linalg.lstsq(lat, grid.crossings.reshape(-1, 2).astype(np.float64), rcond=None)[0]
+    lat = crossing_lattice(grid.n)
+    A = np.linalg.lstsq(np.c_[lat, np.ones(len(lat))], grid.crossings.reshape(-1, 2).astype(np.float64), rcond=None)[0]
     return np.vstack([A.T, [0.0, 0.0, 1.0]])
 
