@@ -76,12 +76,13 @@ class _Recorder:
 
 
 def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], episodes: int, seed: int, gamma: float,
-                  progress: Callable[[int], None] | None = None) -> Demos:
+                  progress: Callable[[int], None] | None = None, weight: float = 2.0) -> Demos:
     """``episodes`` climbs of the planner in ``make_env(**env_kwargs)``, played by the project's
     one episode loop (:func:`kinegym.agents.rollout.run_episode`), the first reset seeded
     ``seed`` (a pool env then draws its tasks from its own seeded generator, as in training).
     Episodes in which the planner finds no route from where the robot is are kept up to there
-    (rare: walls are accepted only with a route). ``progress(1)`` after each episode."""
+    (rare: walls are accepted only with a route). ``progress(1)`` after each episode. ``weight``:
+    the planner's A* weight (:class:`~kinegym.agents.gait_planner.PlannerAgent`)."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.rollout import run_episode
 
@@ -97,7 +98,8 @@ def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], epis
     climbed = 0
     try:
         for i in range(episodes):
-            ep = run_episode(env, _Recorder(PlannerAgent(), obs_rows, masks, acts), seed=int(seed) if i == 0 else None)
+            ep = run_episode(env, _Recorder(PlannerAgent(weight), obs_rows, masks, acts),
+                             seed=int(seed) if i == 0 else None)
             climbed += ep.success
             g, back = 0.0, []
             for r in reversed(ep.rewards):
@@ -119,10 +121,10 @@ class _Labeller:
     planner finds no route)."""
 
     def __init__(self, act: Callable[[np.ndarray, np.ndarray], int], rows: tuple[list, list, list],
-                 stats: dict[str, int]) -> None:
+                 stats: dict[str, int], weight: float = 2.0) -> None:
         from kinegym.agents.gait_planner import PlannerAgent
 
-        self.choose, self.rows, self.stats, self.expert = act, rows, stats, PlannerAgent()
+        self.choose, self.rows, self.stats, self.expert = act, rows, stats, PlannerAgent(weight)
 
     def act(self, env: Any, obs: Any = None) -> int:
         mask = np.asarray(env.action_masks(), dtype=bool)
@@ -141,12 +143,13 @@ class _Labeller:
 
 def policy_labels(make_env: Callable[..., Any], env_kwargs: dict[str, Any],
                   act: Callable[[np.ndarray, np.ndarray], int], episodes: int, seed: int,
-                  progress: Callable[[int], None] | None = None) -> tuple[Demos, dict[str, int]]:
+                  progress: Callable[[int], None] | None = None, weight: float = 2.0) -> tuple[Demos, dict[str, int]]:
     """One DAgger round's data: ``act(obs, mask) -> move`` climbs ``episodes`` tasks of
     ``make_env(**env_kwargs)`` (the first reset seeded ``seed``), played by the project's one
     episode loop; every state it visits is labelled with the planner's move from there. The
     rows' returns are NaN (no return of the planner's from there). Also: states visited, states
-    without a route, states where the planner chose otherwise, and the climbs that succeeded."""
+    without a route, states where the planner chose otherwise, and the climbs that succeeded.
+    ``weight``: the labelling planner's A* weight."""
     from kinegym.agents.rollout import run_episode
 
     if episodes < 1:
@@ -156,7 +159,7 @@ def policy_labels(make_env: Callable[..., Any], env_kwargs: dict[str, Any],
     env = make_env(**env_kwargs)
     try:
         for i in range(episodes):
-            ep = run_episode(env, _Labeller(act, rows, stats), seed=int(seed) if i == 0 else None)
+            ep = run_episode(env, _Labeller(act, rows, stats, weight), seed=int(seed) if i == 0 else None)
             stats["climbed"] += ep.success
             if progress is not None:
                 progress(1)

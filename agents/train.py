@@ -300,7 +300,8 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     # the training envs' tasks, climbed in kinematic mode even for a physics run (the same
     # observations and moves; physics would make the demonstrations a hundred times slower)
     env_kwargs = {**_pool_kwargs(cfg["env_kwargs"], seed), "mode": "kinematic"}
-    demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"])
+    demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"],
+                          weight=cfg["teacher_weight"])
     t1 = time.monotonic()
     stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
                   vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed)
@@ -314,7 +315,8 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     rounds = []
     for r in range(cfg["dagger_rounds"]):  # DAgger: the planner labels the states the policy reaches
         t2 = time.monotonic()
-        labelled, seen = policy_labels(make, env_kwargs, act, cfg["dagger_episodes"], seed=seed + _DAGGER_SEED + r)
+        labelled, seen = policy_labels(make, env_kwargs, act, cfg["dagger_episodes"], seed=seed + _DAGGER_SEED + r,
+                                         weight=cfg["teacher_weight"])
         demos = demos.joined(labelled)
         fit = clone(model.policy, demos, epochs=cfg["dagger_epochs"], batch_size=cfg["batch_size"],
                     vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed + 1 + r)
@@ -499,16 +501,17 @@ TYPICAL_CLIMB = 18
 
 
 def steps_per_second(env_kwargs: dict[str, Any], steps: int = 40, make_env: EnvFactory = make_env,
-                     planner: bool = False) -> float:
+                     planner: bool = False, planner_weight: float = 2.0) -> float:
     """This machine's env steps per second for ``env_kwargs`` (masked random moves on one env,
-    fresh walls; with ``planner`` the planner's moves, as ``evaluate`` runs: in physics a climb's
-    moves take longer than random ones): what the estimates of long commands scale from."""
+    fresh walls; with ``planner`` the planner's moves at A* weight ``planner_weight``, as
+    ``evaluate`` runs: in physics a climb's moves take longer than random ones): what the
+    estimates of long commands scale from."""
     from kinegym.agents.gait_planner import PlannerAgent
 
     kw = {k: v for k, v in env_kwargs.items() if k not in _POOL_KEYS}
     env = make_env(**kw)
     rng = np.random.default_rng(0)
-    agent = PlannerAgent() if planner else None
+    agent = PlannerAgent(planner_weight) if planner else None
     try:
         obs, _ = env.reset(seed=VALIDATION_SEED)
         t0, n = time.perf_counter(), 0
@@ -556,15 +559,23 @@ class EvalRow:
 
 
 def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("kinematic",), walls: str = "held-out",
-             progress: Callable[[], None] | None = None, make_env: EnvFactory = make_env) -> list[EvalRow]:
+             progress: Callable[[], None] | None = None, make_env: EnvFactory = make_env,
+             planner_weight: float = 2.0) -> list[EvalRow]:
     """The policy and the planner, deterministically, on the same walls: ``held-out`` (wall
-    ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``."""
+    ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``. ``planner_weight``: the
+    planner's A* weight (2, its own default; 1.1 comes within about 1 % of the shortest
+    routes at about three times the cost); its row is named ``planner`` at 2, else
+    ``planner (weight W)``."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.policies import MaskedPolicyAgent
     from kinegym.agents.rollout import run_episode
 
     if walls not in ("held-out", "validation"):
         raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
+    if not 1.0 <= planner_weight <= 10.0:
+        raise ValueError(f"planner_weight={planner_weight!r}; expected 1..10 (1 = shortest routes, 2 = the "
+                         "planner's own)")
+    planner = "planner" if planner_weight == 2.0 else f"planner (weight {planner_weight:g})"
     base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
     pol = MaskedPolicyAgent(policy)
     rows = []
@@ -578,7 +589,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
         results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
         for i in range(episodes):
             for name in ("planner", "policy"):
-                ep = run_episode(env, PlannerAgent() if name == "planner" else pol, seed=base + i)
+                ep = run_episode(env, PlannerAgent(planner_weight) if name == "planner" else pol, seed=base + i)
                 results[name].append({"success": ep.success, "falls": ep.falls, "moves": ep.moves,
                                       "think": float(np.median(ep.think_s)) if ep.think_s else 0.0})
             if progress:
@@ -593,7 +604,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
                 ratio = math.nan
             else:
                 ratio = float(np.mean([a / b for a, b in both])) if name == "policy" else 1.0
-            rows.append(EvalRow(name if name == "planner" else str(policy), mode, len(res),
+            rows.append(EvalRow(planner if name == "planner" else str(policy), mode, len(res),
                                 len(ok) / len(res), sum(r["falls"] for r in res),
                                 float(np.mean([r["moves"] for r in ok])) if ok else math.nan, ratio,
                                 1000 * float(np.median([r["think"] for r in res]))))

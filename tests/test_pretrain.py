@@ -81,18 +81,21 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
 
     seen: dict = {}
 
-    def fake_demos(make, env_kwargs, episodes, seed, gamma):  # noqa: ANN001, ANN202
+    def fake_demos(make, env_kwargs, episodes, seed, gamma, weight):  # noqa: ANN001, ANN202
         seen.update(env_kwargs)
+        weights.append(weight)
         return demos
 
-    def fake_labels(make, env_kwargs, act, episodes, seed):  # noqa: ANN001, ANN202
+    def fake_labels(make, env_kwargs, act, episodes, seed, weight):  # noqa: ANN001, ANN202
         seen_labels.update(env_kwargs)
+        weights.append(weight)
         picked = act(demos.obs[0], demos.masks[0])
         assert demos.masks[0][picked]  # the policy's move is one the env offered
         return Demos(demos.obs[:3], demos.actions[:3], demos.masks[:3], np.full(3, np.nan, np.float32), 1, 0), {
             "states": 3, "no_route": 0, "differed": 1, "climbed": 0}
 
     seen_labels: dict = {}
+    weights: list[float] = []
     monkeypatch.setattr(P, "planner_demos", fake_demos)
     monkeypatch.setattr(P, "policy_labels", fake_labels)
     from sb3_contrib import MaskablePPO
@@ -106,6 +109,23 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
     assert got["moves"] == len(demos) and (tmp_path / "pretrain.yaml").is_file()
     assert seen_labels == seen  # DAgger's climbs too: the same pool, kinematic
     assert [r["rows"] for r in got["dagger"]] == [len(demos) + 3 * (r + 1) for r in range(cfg["dagger_rounds"])]
+    # the config's teacher demonstrates and labels (the default: the planner near its shortest routes)
+    assert weights == [cfg["teacher_weight"]] * (1 + cfg["dagger_rounds"]) and cfg["teacher_weight"] == 1.1
+
+
+def test_a_teacher_nearer_the_shortest_routes_demonstrates_shorter_climbs() -> None:
+    """The same twelve pool tasks climbed by the planner at A* weight 2 (its own default) and
+    at 1.1: the second's climbs are shorter in all (weighted A* returns routes at most ``w``
+    times the shortest), and its demonstrations are the moves it makes."""
+    from kinegym.agents.gait_planner import PlannerAgent
+
+    kw = {**KW, "wall_pool": 12, "wall_pool_seed": 3}
+    far = planner_demos(T.make_env, kw, episodes=12, seed=5, gamma=0.98, weight=2.0)
+    near = planner_demos(T.make_env, kw, episodes=12, seed=5, gamma=0.98, weight=1.1)
+    assert far.climbed == near.climbed == 12 and len(near) < len(far)
+    env = T.make_env(**kw)
+    obs, _ = env.reset(seed=5)
+    assert near.actions[0] == PlannerAgent(1.1).act(env.unwrapped, obs)
 
 
 def test_dagger_labels_the_policy_s_own_states_with_the_planner_s_moves(demos: Demos) -> None:
@@ -114,14 +134,14 @@ def test_dagger_labels_the_policy_s_own_states_with_the_planner_s_moves(demos: D
     from kinegym.agents.gait_planner import PlannerAgent
 
     first = lambda obs, mask: int(np.flatnonzero(mask)[0])  # noqa: E731
-    got, stats = policy_labels(T.make_env, KW, first, episodes=2, seed=11)
+    got, stats = policy_labels(T.make_env, KW, first, episodes=2, seed=11, weight=1.1)
     n = len(got)
     assert n == stats["states"] - stats["no_route"] > 0 and np.isnan(got.returns).all()
     assert got.masks[np.arange(n), got.actions].all() and got.episodes == 2
     assert 0 < stats["differed"] <= n  # the first offered move is not always the planner's
     env = T.make_env(**KW)
     obs, _ = env.reset(seed=11)
-    assert np.array_equal(got.obs[0], obs) and got.actions[0] == PlannerAgent().act(env.unwrapped, obs)
+    assert np.array_equal(got.obs[0], obs) and got.actions[0] == PlannerAgent(1.1).act(env.unwrapped, obs)
     with pytest.raises(ValueError, match="episodes=0"):
         policy_labels(T.make_env, KW, first, episodes=0, seed=0)
 

@@ -25,13 +25,15 @@ def _say(args: argparse.Namespace, text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
 
-def _evaluate_cost(policy_kwargs: dict[str, Any], episodes: int, modes: tuple[str, ...]) -> tuple[float, str]:
+def _evaluate_cost(policy_kwargs: dict[str, Any], episodes: int, modes: tuple[str, ...],
+                   planner_weight: float = 2.0) -> tuple[float, str]:
     """Rough seconds for ``evaluate`` (both agents, every mode) and how it was measured."""
     from kinegym.agents import train as T
 
     total, parts = 0.0, []
     for mode in modes:
-        sps = T.steps_per_second({**policy_kwargs, "mode": mode}, steps=12 if mode == "physics" else 40, planner=True)
+        sps = T.steps_per_second({**policy_kwargs, "mode": mode}, steps=12 if mode == "physics" else 40, planner=True,
+                                 planner_weight=planner_weight)
         total += 2 * episodes * T.TYPICAL_CLIMB / sps
         parts.append(f"{mode} {sps:.0f} steps/s")
     return total, ", ".join(parts)
@@ -118,16 +120,20 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise UsageError(f"--policy {args.policy!r} is not a model file (.zip)")
     if args.episodes < 1:
         raise UsageError(f"--episodes {args.episodes}; expected >= 1")
+    if not 1.0 <= args.planner_weight <= 10.0:
+        raise UsageError(f"--planner-weight {args.planner_weight}; expected 1..10 (1 = shortest routes, 2 = the "
+                         "planner's own)")
     modes = ("kinematic", "physics") if args.mode == "both" else (args.mode,)
     if not args.json:
         from kinegym.agents.policies import policy_env_kwargs
 
-        est, how = _evaluate_cost(policy_env_kwargs(args.policy), args.episodes, modes)
+        est, how = _evaluate_cost(policy_env_kwargs(args.policy), args.episodes, modes, args.planner_weight)
         _say(args, f"evaluate: {args.episodes} walls x {len(modes)} mode(s) x 2 agents: about {_minutes(est)} here "
                    f"({how}; --mode kinematic and fewer --episodes are quicker)")
     with Progress(args.episodes * len(modes), "evaluate (policy and planner on the same walls)",
                   enabled=not args.json) as bar:
-        rows = T.evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update)
+        rows = T.evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update,
+                          planner_weight=args.planner_weight)
 
     def f(v: float, fmt: str) -> str:
         return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
@@ -235,6 +241,9 @@ def add_parsers(sub: Any) -> None:
     ev.add_argument("--episodes", type=int, default=50)
     ev.add_argument("--walls", default="held-out", choices=("held-out", "validation"))
     ev.add_argument("--mode", default="both", choices=("kinematic", "physics", "both"))
+    ev.add_argument("--planner-weight", type=float, default=2.0,
+                    help="the planner's A* weight (default 2, its own; 1.1: within about 1%% of the shortest routes, "
+                         "the training config's teacher)")
     add_json(ev)
     ev.set_defaults(func=cmd_evaluate)
 
