@@ -46,13 +46,11 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
 
 from __future__ import annotations
 
-import math
 import shutil
 import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -81,8 +79,6 @@ __all__ = [
     "parse_schedule",
     "train",
     "resume",
-    "evaluate",
-    "EvalRow",
     "policy_env_kwargs",
     "make_env",
     "EnvFactory",
@@ -328,8 +324,9 @@ def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, ru
     return out
 
 
-#: about what one demonstration climb costs on a training task (planner, env, a pool task made): for estimates
-BC_SECONDS_PER_EPISODE = 0.14
+#: about what one demonstration climb costs on a training task (the default teacher, A* weight 1.1; env; a pool
+#: task made): for estimates
+BC_SECONDS_PER_EPISODE = 0.2
 
 #: the planner's demonstration climbs reset their env from ``seed + _BC_SEED_OFFSET`` (the
 #: training envs use ``seed`` and ``seed + 1``: another draw of the same pool's tasks), DAgger's
@@ -337,8 +334,8 @@ BC_SECONDS_PER_EPISODE = 0.14
 _BC_SEED_OFFSET = 7919
 _DAGGER_SEED = 2 * 7919
 
-#: about what one DAgger climb costs (the policy climbing, the planner labelling every state)
-DAGGER_SECONDS_PER_EPISODE = 0.25
+#: about what one DAgger climb costs (the policy climbing, the default teacher labelling every state)
+DAGGER_SECONDS_PER_EPISODE = 0.36
 
 
 def _saved_steps(model_zip: Path) -> int:
@@ -538,74 +535,3 @@ def estimate_train_s(cfg: dict[str, Any], sps: float, timesteps: int | None = No
     parallel = max(1, min(cfg["n_envs"], os.cpu_count() or 1))
     evals = steps // max(cfg["eval_freq"], 1)
     return 2.5 * steps / (sps * parallel) + evals * cfg["eval_episodes"] * TYPICAL_EPISODE / sps
-
-
-# ------------------------------------------------------------------ evaluation
-@dataclass
-class EvalRow:
-    """One agent on the held-out walls in one mode."""
-
-    agent: str
-    mode: str
-    episodes: int
-    success: float
-    falls: int
-    mean_moves: float
-    moves_vs_planner: float
-    decision_ms: float
-
-    def as_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
-
-
-def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("kinematic",), walls: str = "held-out",
-             progress: Callable[[], None] | None = None, make_env: EnvFactory = make_env,
-             planner_weight: float = 2.0) -> list[EvalRow]:
-    """The policy and the planner, deterministically, on the same walls: ``held-out`` (wall
-    ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``. ``planner_weight``: the
-    planner's A* weight (2, its own default; 1.1 comes within about 1 % of the shortest
-    routes at about three times the cost); its row is named ``planner`` at 2, else
-    ``planner (weight W)``."""
-    from kinegym.agents.gait_planner import PlannerAgent
-    from kinegym.agents.policies import MaskedPolicyAgent
-    from kinegym.agents.rollout import run_episode
-
-    if walls not in ("held-out", "validation"):
-        raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
-    if not 1.0 <= planner_weight <= 10.0:
-        raise ValueError(f"planner_weight={planner_weight!r}; expected 1..10 (1 = shortest routes, 2 = the "
-                         "planner's own)")
-    planner = "planner" if planner_weight == 2.0 else f"planner (weight {planner_weight:g})"
-    base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
-    pol = MaskedPolicyAgent(policy)
-    rows = []
-    env_kwargs = policy_env_kwargs(policy)
-    for mode in modes:
-        env = make_env(**{**env_kwargs, "mode": mode})
-        if env.observation_space.shape != pol.model.observation_space.shape:
-            raise ValueError(f"{policy}: the model sees observations of shape {pol.model.observation_space.shape}, "
-                             f"the env {env.observation_space.shape} with env_kwargs {env_kwargs} (no run config.yaml "
-                             "beside the model?)")
-        results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
-        for i in range(episodes):
-            for name in ("planner", "policy"):
-                ep = run_episode(env, PlannerAgent(planner_weight) if name == "planner" else pol, seed=base + i)
-                results[name].append({"success": ep.success, "falls": ep.falls, "moves": ep.moves,
-                                      "think": float(np.median(ep.think_s)) if ep.think_s else 0.0})
-            if progress:
-                progress()
-        env.close()
-        for name in ("policy", "planner"):
-            res = results[name]
-            ok = [r for r in res if r["success"]]
-            both = [(p["moves"], q["moves"]) for p, q in zip(results["policy"], results["planner"])
-                    if p["success"] and q["success"]]
-            if not both:
-                ratio = math.nan
-            else:
-                ratio = float(np.mean([a / b for a, b in both])) if name == "policy" else 1.0
-            rows.append(EvalRow(planner if name == "planner" else str(policy), mode, len(res),
-                                len(ok) / len(res), sum(r["falls"] for r in res),
-                                float(np.mean([r["moves"] for r in ok])) if ok else math.nan, ratio,
-                                1000 * float(np.median([r["think"] for r in res]))))
-    return rows

@@ -14,6 +14,7 @@ import pytest
 import yaml
 
 from kinegym.agents import train as T
+from kinegym.agents.evaluation import evaluate
 from kinegym.configs import ConfigError
 
 SMALL = {"n_envs": 2, "n_timesteps": 1024, "n_steps": 64, "batch_size": 64, "n_epochs": 2,
@@ -118,20 +119,20 @@ def test_train_smoke_resume_and_evaluate(tmp_path: Path) -> None:
     assert cfg_phys["resumed_steps"] == second.num_timesteps
     assert MaskablePPO.load(phys / "final_model.zip", device="cpu").num_timesteps >= second.num_timesteps + 128
 
-    rows = T.evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",))
+    rows = evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",))
     by = {r.agent: r for r in rows}
     assert by["planner"].success == 1.0 and by["planner"].episodes == 2
     pol = next(r for r in rows if r.agent != "planner")
     assert 0.0 <= pol.success <= 1.0 and pol.decision_ms > 0
     # against the planner nearer the shortest routes (the training config's teacher): the same walls
-    near = {r.agent: r for r in T.evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",),
+    near = {r.agent: r for r in evaluate(res / "final_model.zip", episodes=2, modes=("kinematic",),
                                            planner_weight=1.1)}
     assert near["planner (weight 1.1)"].success == 1.0
     assert near["planner (weight 1.1)"].mean_moves <= by["planner"].mean_moves
     same = near[str(res / "final_model.zip")]  # the policy's climbs are the same
     assert same.success == pol.success and np.array_equal(same.mean_moves, pol.mean_moves, equal_nan=True)
     with pytest.raises(ValueError, match="planner_weight=0.5"):
-        T.evaluate(res / "final_model.zip", episodes=1, planner_weight=0.5)
+        evaluate(res / "final_model.zip", episodes=1, planner_weight=0.5)
 
 
 def test_tune_two_workers_share_one_study(tmp_path: Path) -> None:

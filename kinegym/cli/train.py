@@ -114,6 +114,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from kinegym.agents import train as T
+    from kinegym.agents.evaluation import evaluate
     from kinegym.progress import Progress
 
     if not Path(args.policy).is_file():
@@ -132,8 +133,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                    f"({how}; --mode kinematic and fewer --episodes are quicker)")
     with Progress(args.episodes * len(modes), "evaluate (policy and planner on the same walls)",
                   enabled=not args.json) as bar:
-        rows = T.evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update,
-                          planner_weight=args.planner_weight)
+        rows = evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update,
+                        planner_weight=args.planner_weight)
 
     def f(v: float, fmt: str) -> str:
         return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
