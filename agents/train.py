@@ -1,5 +1,5 @@
-"""Learning the climber's gait with stable-baselines3: train, resume, evaluate against the
-planner, and tune hyper-parameters on Optuna.
+"""Learning the climber's gait with stable-baselines3: train, resume, and tune
+hyper-parameters on Optuna (evaluating against the planner: :mod:`kinegym.agents.evaluation`).
 
 One readable script in the CleanRL spirit, behind ``kinegym train gait``, ``kinegym
 evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait ...``):
@@ -25,12 +25,13 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   ``N`` training tasks and the policy and its critic are fitted to those climbs
   (:mod:`kinegym.agents.pretrain`; in kinematic mode, also for a physics run); with
   ``dagger_rounds: R`` the policy then climbs ``dagger_episodes`` tasks per round, the
-  planner labels the states it reached, and it is fitted again (DAgger). The time counts
-  against ``--minutes``.
+  planner labels the states it reached, and it is fitted again (DAgger). The planner that
+  does both runs at A* weight ``teacher_weight`` (1.1 in the config: near the shortest
+  routes; the planner's own is 2). The time counts against ``--minutes``.
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
   (fast: route checks and move judgements are kept); the evaluation callback uses fresh
-  walls of the validation stream (seed ``VALIDATION_SEED``); ``evaluate`` uses fresh
+  walls of the validation stream (seed ``VALIDATION_SEED``); ``evaluation.evaluate`` uses fresh
   held-out walls ``HELD_OUT_SEED + i``, each reset with its own seed - never seen in
   training or selection.
 * **Tuning**: ``tune`` runs Optuna trials (TPE sampler, median pruner fed by the evaluation
