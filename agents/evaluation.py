@@ -20,7 +20,17 @@ import numpy as np
 from kinegym.agents.policies import policy_env_kwargs
 from kinegym.agents.train import HELD_OUT_SEED, VALIDATION_SEED, EnvFactory, make_env
 
-__all__ = ["EvalRow", "evaluate"]
+__all__ = ["EvalRow", "evaluate", "check_planner_weight", "PLANNER_WEIGHTS"]
+
+#: the planner's A* weights ``evaluate`` takes (1 = shortest routes, 2 = the planner's own)
+PLANNER_WEIGHTS = (1.0, 10.0)
+
+
+def check_planner_weight(weight: float, name: str = "planner_weight=") -> None:
+    """ValueError naming ``name`` and ``weight`` unless it lies in :data:`PLANNER_WEIGHTS`."""
+    lo, hi = PLANNER_WEIGHTS
+    if not lo <= weight <= hi:
+        raise ValueError(f"{name}{weight!r}; expected {lo:g}..{hi:g} (1 = shortest routes, 2 = the planner's own)")
 
 
 @dataclass
@@ -52,9 +62,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
 
     if walls not in ("held-out", "validation"):
         raise ValueError(f"walls={walls!r}; expected 'held-out' or 'validation'")
-    if not 1.0 <= planner_weight <= 10.0:
-        raise ValueError(f"planner_weight={planner_weight!r}; expected 1..10 (1 = shortest routes, 2 = the "
-                         "planner's own)")
+    check_planner_weight(planner_weight)
     planner = "planner" if planner_weight == 2.0 else f"planner (weight {planner_weight:g})"
     base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
     pol = MaskedPolicyAgent(policy)

@@ -114,16 +114,17 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from kinegym.agents import train as T
-    from kinegym.agents.evaluation import evaluate
+    from kinegym.agents.evaluation import check_planner_weight, evaluate
     from kinegym.progress import Progress
 
     if not Path(args.policy).is_file():
         raise UsageError(f"--policy {args.policy!r} is not a model file (.zip)")
     if args.episodes < 1:
         raise UsageError(f"--episodes {args.episodes}; expected >= 1")
-    if not 1.0 <= args.planner_weight <= 10.0:
-        raise UsageError(f"--planner-weight {args.planner_weight}; expected 1..10 (1 = shortest routes, 2 = the "
-                         "planner's own)")
+    try:
+        check_planner_weight(args.planner_weight, "--planner-weight ")
+    except ValueError as err:
+        raise UsageError(str(err)) from None
     modes = ("kinematic", "physics") if args.mode == "both" else (args.mode,)
     if not args.json:
         from kinegym.agents.policies import policy_env_kwargs
