@@ -1,4 +1,5 @@
-"""MaskablePPO and VecNormalize whose every save is atomic (SB3 writes files in place).
+"""MaskablePPO and VecNormalize whose every save is atomic (SB3 writes files in place), and
+a MaskablePPO whose schedules can run over a time budget.
 
 SB3's ``model.save`` and ``VecNormalize.save`` open the target and write into it; a run
 killed in the middle of a checkpoint leaves a truncated ``.zip`` that ``--resume`` would then
@@ -6,6 +7,11 @@ pick. :class:`AtomicMaskablePPO` and :class:`AtomicVecNormalize` serialise to me
 the bytes to :func:`kinegym.configs.io.write_atomic` (temporary file, fsync, rename), so
 every checkpoint, best model and final model on disk is whole. The files are the ordinary
 SB3 formats: ``sb3_contrib.MaskablePPO.load`` and ``VecNormalize.load`` read them.
+
+SB3 moves a schedule (``learning_rate: lin_2e-4``) by the steps taken out of
+``total_timesteps``; a run stopped by a time budget long before them never anneals.
+While :attr:`AtomicMaskablePPO.time_budget` is set (``kinegym train --minutes``), the
+schedule's progress is the budget's time left when that is less than the steps left.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from __future__ import annotations
 import io
 import os
 import pickle
+import time
 from pathlib import Path
 from typing import Any
 
@@ -70,7 +77,24 @@ def load_vecnormalize(path: Any, venv: Any) -> Any:
 
 
 class AtomicMaskablePPO(MaskablePPO):
-    """MaskablePPO whose :meth:`save` to a path is atomic (same archive as MaskablePPO's)."""
+    """MaskablePPO whose :meth:`save` to a path is atomic (same archive as MaskablePPO's), and
+    whose schedules end with a time budget when one is set."""
+
+    #: ``(start, deadline)`` in ``time.monotonic()`` seconds while training runs on a time
+    #: budget, else None; never saved (a loaded model runs by its steps until one is set)
+    time_budget: tuple[float, float] | None = None
+
+    def _update_current_progress_remaining(self, num_timesteps: int, total_timesteps: int) -> None:
+        """SB3's progress by steps, or the time budget's share left when it is less: a linear
+        schedule then reaches its end when the budget does."""
+        super()._update_current_progress_remaining(num_timesteps, total_timesteps)
+        if self.time_budget is not None:
+            start, deadline = self.time_budget
+            left = (deadline - time.monotonic()) / max(deadline - start, 1e-9)
+            self._current_progress_remaining = min(self._current_progress_remaining, max(left, 0.0))
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "time_budget"]
 
     def save(self, path: Any, exclude: Any = None, include: Any = None) -> None:  # type: ignore[override]
         if not isinstance(path, (str, Path)):

@@ -12,7 +12,7 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   ``SubprocVecEnv`` when ``n_envs > 1`` (forkserver workers: keep the ``__main__`` guard),
   ``torch.set_num_threads(1)`` by default (several times faster on 2 cores); ``--minutes M``
   stops after ``M`` minutes of wall time and saves the final model (a time budget instead
-  of a step count).
+  of a step count; a schedule such as ``lin_2e-4`` then anneals over the time PPO has left).
 * **A run directory** holds ``config.yaml`` (resolved), ``command.txt``, ``monitor/``
   (Monitor CSVs with ``is_success``), ``tb/`` (TensorBoard), ``checkpoints/`` (model,
   optimiser, step counter and normalisation statistics every ``checkpoint_freq`` steps),
@@ -170,7 +170,9 @@ def _new_run_dir(base: Path, stem: str) -> Path:
 def _time_limit(minutes: float | None, start: float | None = None) -> list[Any]:
     """A callback that ends training cleanly (final model saved) after ``minutes`` of wall
     time counted from ``start`` (a ``time.monotonic()`` reading; None: when learning starts),
-    so that a warm start counts against the budget too; none for None."""
+    so that a warm start counts against the budget too; none for None. Meanwhile the model's
+    schedules (``lin_2e-4``) run over the time left to learning, not over ``n_timesteps``
+    (:attr:`~kinegym.agents.atomic_save.AtomicMaskablePPO.time_budget`)."""
     if minutes is None:
         return []
     if not minutes > 0:
@@ -180,6 +182,12 @@ def _time_limit(minutes: float | None, start: float | None = None) -> list[Any]:
     class TimeLimit(BaseCallback):
         def _on_training_start(self) -> None:
             self.deadline = (time.monotonic() if start is None else start) + 60.0 * float(minutes)
+            if hasattr(self.model, "time_budget"):  # the schedules run over what is left of the budget
+                self.model.time_budget = (time.monotonic(), self.deadline)
+
+        def _on_training_end(self) -> None:
+            if hasattr(self.model, "time_budget"):
+                self.model.time_budget = None
 
         def _on_step(self) -> bool:
             return time.monotonic() < self.deadline

@@ -171,6 +171,43 @@ def test_minutes_ends_training_cleanly_and_the_pool_stays_out_of_evaluation(tmp_
         T.train(cfg, minutes=0, out=tmp_path / "runs", progress=False)
 
 
+def test_a_time_budget_anneals_the_schedules_and_is_never_saved(tmp_path: Path) -> None:
+    """With ``--minutes`` SB3 would move ``lin_...`` by steps out of ``n_timesteps`` and never
+    anneal; the budget's share of time left rules when it is less, and only while it runs."""
+    import time
+
+    import gymnasium as gym
+
+    from kinegym.agents.atomic_save import AtomicMaskablePPO
+
+    model = AtomicMaskablePPO("MlpPolicy", gym.make("CartPole-v1"), learning_rate=T.parse_schedule("lin_1e-3"),
+                              n_steps=64, batch_size=32, device="cpu")
+    model._update_current_progress_remaining(100, 1000)
+    assert model._current_progress_remaining == pytest.approx(0.9)  # by steps, as SB3
+    now = time.monotonic()
+    model.time_budget = (now - 30.0, now + 10.0)  # three quarters of the budget spent
+    model._update_current_progress_remaining(100, 1000)
+    assert 0.2 < model._current_progress_remaining <= 0.25
+    assert model.lr_schedule(model._current_progress_remaining) == pytest.approx(
+        1e-3 * model._current_progress_remaining)
+    model._update_current_progress_remaining(950, 1000)  # the steps end first: they rule
+    assert model._current_progress_remaining == pytest.approx(0.05)
+    model.time_budget = (now - 30.0, now - 1.0)  # past the deadline: the schedule's end, never below
+    model._update_current_progress_remaining(0, 1000)
+    assert model._current_progress_remaining == 0.0
+    model.save(tmp_path / "m.zip")
+    assert AtomicMaskablePPO.load(tmp_path / "m.zip", device="cpu").time_budget is None
+    # the --minutes callback sets the budget from learning's start to the deadline, and clears it
+    (limit,) = T._time_limit(2.0, start=now - 60.0)  # a warm start took a minute of the two
+    model.time_budget = None
+    limit.init_callback(model)
+    limit.on_training_start({}, {})
+    start, deadline = model.time_budget
+    assert deadline == pytest.approx(now + 60.0) and start == pytest.approx(time.monotonic(), abs=5.0)
+    limit.on_training_end()
+    assert model.time_budget is None
+
+
 @pytest.mark.slow
 def test_a_run_killed_at_random_moments_resumes_cleanly() -> None:
     """bench/kill_resume.py at 2 random kill points (SIGKILL, then --resume): every file the
