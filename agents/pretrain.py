@@ -22,6 +22,13 @@ again. A cloned policy fails by cycling in states the planner's climbs never sho
 there, it leaves them. The value head is fitted on the planner's climbs only (a labelled
 state has no return of the planner's to learn).
 
+With ``workers=k`` both are shared among ``k`` processes (forkserver, as the training envs):
+the episodes are split into ``k`` runs of consecutive climbs, run ``j``'s first reset seeded
+``seed + j * CHUNK_SEED``, and the rows joined in run order, so the result depends on ``k``
+but not on which process finishes first (``k = 1``: one run seeded ``seed``, in this process).
+The policy travels to the processes as :class:`GreedyPolicy` (its class, constructor
+parameters and weights), each on one torch thread.
+
 PPO then learns from there as usual; the planner is never consulted again (not in
 training's later phase, not at evaluation: the policy acts from its observations alone).
 The planner is weighted A*, so its climbs are good, not optimal: the policy can improve on
@@ -30,7 +37,9 @@ them.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import multiprocessing
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -59,6 +68,64 @@ class Demos:
                      self.episodes + other.episodes, self.climbed + other.climbed)
 
 
+#: run ``j`` of a job shared among processes has its first reset seeded ``seed + j * CHUNK_SEED``
+CHUNK_SEED = 1_000_003
+
+
+def _runs(episodes: int, seed: int, workers: int) -> list[tuple[int, int]]:
+    """``(episodes, seed)`` of each process's run: ``episodes`` split as evenly as can be among
+    ``min(workers, episodes)`` runs, the first ones one longer."""
+    if episodes < 1:
+        raise ValueError(f"episodes={episodes!r}; expected >= 1")
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ValueError(f"workers={workers!r}; expected an integer >= 1")
+    k = min(workers, episodes)
+    return [(episodes // k + (j < episodes % k), int(seed) + j * CHUNK_SEED) for j in range(k)]
+
+
+def _shared(job: Callable[..., Any], runs: Sequence[tuple[int, int]], args: tuple,
+            progress: Callable[[int], None] | None) -> list[Any]:
+    """``job(*args, episodes, seed)`` for each run, in this process for one run, else each in a
+    forkserver process; the results in run order (``progress(n)`` as each run of ``n`` ends)."""
+    if len(runs) == 1:
+        return [job(*args, *runs[0], progress=progress)]
+    with ProcessPoolExecutor(len(runs), mp_context=multiprocessing.get_context("forkserver")) as pool:
+        futures = [pool.submit(job, *args, n, s) for n, s in runs]
+        out = []
+        for f, (n, _) in zip(futures, runs):
+            out.append(f.result())
+            if progress is not None:
+                progress(n)
+        return out
+
+
+class GreedyPolicy:
+    """A MaskablePPO policy as :func:`policy_labels` calls it: ``act(obs, mask) -> move``, its
+    greedy masked choice (as the policy is evaluated). Pickled, it travels as the policy's
+    class, constructor parameters and weights and is rebuilt on the other side, on one torch
+    thread (SB3's own policy ``save``/``load`` route, in memory)."""
+
+    def __init__(self, policy: Any) -> None:
+        self.policy = policy
+
+    def __call__(self, obs: np.ndarray, mask: np.ndarray) -> int:
+        return int(self.policy.predict(obs, action_masks=mask, deterministic=True)[0])
+
+    def __getstate__(self) -> dict[str, Any]:
+        p = self.policy
+        return {"cls": type(p), "params": p._get_constructor_parameters(),
+                "weights": {k: v.detach().cpu() for k, v in p.state_dict().items()}}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        import torch as th
+
+        th.set_num_threads(1)
+        policy = state["cls"](**state["params"])
+        policy.load_state_dict(state["weights"])
+        policy.set_training_mode(False)
+        self.policy = policy
+
+
 class _Recorder:
     """An agent that lets ``inner`` act and keeps what it saw and chose (the observation,
     the env's action mask, the action) for every move it made."""
@@ -76,20 +143,34 @@ class _Recorder:
 
 
 def planner_demos(make_env: Callable[..., Any], env_kwargs: dict[str, Any], episodes: int, seed: int, gamma: float,
-                  progress: Callable[[int], None] | None = None, weight: float = 2.0) -> Demos:
+                  progress: Callable[[int], None] | None = None, weight: float = 2.0, workers: int = 1) -> Demos:
     """``episodes`` climbs of the planner in ``make_env(**env_kwargs)``, played by the project's
     one episode loop (:func:`kinegym.agents.rollout.run_episode`), the first reset seeded
     ``seed`` (a pool env then draws its tasks from its own seeded generator, as in training).
     Episodes in which the planner finds no route from where the robot is are kept up to there
-    (rare: walls are accepted only with a route). ``progress(1)`` after each episode. ``weight``:
-    the planner's A* weight (:class:`~kinegym.agents.gait_planner.PlannerAgent`)."""
+    (rare: walls are accepted only with a route). ``progress(1)`` after each episode (with several
+    workers ``progress(n)`` as each process's ``n`` end). ``weight``:
+    the planner's A* weight (:class:`~kinegym.agents.gait_planner.PlannerAgent`). ``workers``:
+    processes sharing the climbs (module docstring; ``make_env`` then a module-level function)."""
+    if not 0.0 <= gamma <= 1.0:
+        raise ValueError(f"gamma={gamma!r}; expected 0..1")
+    parts = _shared(_planner_run, _runs(episodes, seed, workers), (make_env, env_kwargs, gamma, weight), progress)
+    return _joined(parts)
+
+
+def _joined(parts: Sequence[Demos]) -> Demos:
+    out = parts[0]
+    for p in parts[1:]:
+        out = out.joined(p)
+    return out
+
+
+def _planner_run(make_env: Callable[..., Any], env_kwargs: dict[str, Any], gamma: float, weight: float,
+                 episodes: int, seed: int, progress: Callable[[int], None] | None = None) -> Demos:
+    """One process's share of :func:`planner_demos`."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.rollout import run_episode
 
-    if episodes < 1:
-        raise ValueError(f"episodes={episodes!r}; expected >= 1")
-    if not 0.0 <= gamma <= 1.0:
-        raise ValueError(f"gamma={gamma!r}; expected 0..1")
     env = make_env(**env_kwargs)
     obs_rows: list[np.ndarray] = []
     acts: list[int] = []
@@ -143,17 +224,26 @@ class _Labeller:
 
 def policy_labels(make_env: Callable[..., Any], env_kwargs: dict[str, Any],
                   act: Callable[[np.ndarray, np.ndarray], int], episodes: int, seed: int,
-                  progress: Callable[[int], None] | None = None, weight: float = 2.0) -> tuple[Demos, dict[str, int]]:
+                  progress: Callable[[int], None] | None = None, weight: float = 2.0,
+                  workers: int = 1) -> tuple[Demos, dict[str, int]]:
     """One DAgger round's data: ``act(obs, mask) -> move`` climbs ``episodes`` tasks of
     ``make_env(**env_kwargs)`` (the first reset seeded ``seed``), played by the project's one
     episode loop; every state it visits is labelled with the planner's move from there. The
     rows' returns are NaN (no return of the planner's from there). Also: states visited, states
     without a route, states where the planner chose otherwise, and the climbs that succeeded.
-    ``weight``: the labelling planner's A* weight."""
+    ``weight``: the labelling planner's A* weight. ``workers``: processes sharing the climbs
+    (module docstring; ``act`` must then pickle, as :class:`GreedyPolicy` does)."""
+    parts = _shared(_label_run, _runs(episodes, seed, workers), (make_env, env_kwargs, act, weight), progress)
+    stats = {k: sum(p[1][k] for p in parts) for k in parts[0][1]}
+    return _joined([p[0] for p in parts]), stats
+
+
+def _label_run(make_env: Callable[..., Any], env_kwargs: dict[str, Any], act: Callable[[np.ndarray, np.ndarray], int],
+               weight: float, episodes: int, seed: int,
+               progress: Callable[[int], None] | None = None) -> tuple[Demos, dict[str, int]]:
+    """One process's share of :func:`policy_labels`."""
     from kinegym.agents.rollout import run_episode
 
-    if episodes < 1:
-        raise ValueError(f"episodes={episodes!r}; expected >= 1")
     rows: tuple[list, list, list] = ([], [], [])
     stats = {"states": 0, "no_route": 0, "differed": 0, "climbed": 0}
     env = make_env(**env_kwargs)

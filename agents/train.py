@@ -27,7 +27,8 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   ``dagger_rounds: R`` the policy then climbs ``dagger_episodes`` tasks per round, the
   planner labels the states it reached, and it is fitted again (DAgger). The planner that
   does both runs at A* weight ``teacher_weight`` (1.1 in the config: near the shortest
-  routes; the planner's own is 2). The time counts against ``--minutes``.
+  routes; the planner's own is 2). ``warm_start_workers`` processes share the climbs (2 in the
+  config: the training envs wait meanwhile). The time counts against ``--minutes``.
 * **Walls**: training envs draw walls from streams seeded ``seed, seed + 1, ...`` - or,
   with ``env_kwargs.wall_pool: N``, from a pool of ``N`` tasks made from the run's seed
   (fast: route checks and move judgements are kept); the evaluation callback uses fresh
@@ -299,29 +300,29 @@ def train(config: str | Path = DEFAULT_CONFIG, timesteps: int | None = None, see
 def _warm_start(model: Any, cfg: dict[str, Any], seed: int, make: EnvFactory, run: Path) -> dict[str, Any]:
     """Clone ``cfg["bc_episodes"]`` planner climbs on the training tasks into ``model``'s policy
     (:mod:`kinegym.agents.pretrain`); what it measured goes to ``run/pretrain.yaml``."""
-    from kinegym.agents.pretrain import clone, planner_demos, policy_labels
+    from kinegym.agents.pretrain import GreedyPolicy, clone, planner_demos, policy_labels
 
     t0 = time.monotonic()
     # the training envs' tasks, climbed in kinematic mode even for a physics run (the same
     # observations and moves; physics would make the demonstrations a hundred times slower)
     env_kwargs = {**_pool_kwargs(cfg["env_kwargs"], seed), "mode": "kinematic"}
+    workers = cfg["warm_start_workers"]
     demos = planner_demos(make, env_kwargs, cfg["bc_episodes"], seed=seed + _BC_SEED_OFFSET, gamma=cfg["gamma"],
-                          weight=cfg["teacher_weight"])
+                          weight=cfg["teacher_weight"], workers=workers)
     t1 = time.monotonic()
     stats = clone(model.policy, demos, epochs=cfg["bc_epochs"], batch_size=cfg["batch_size"],
                   vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed)
-    out: dict[str, Any] = {"episodes": demos.episodes, "climbed": demos.climbed, "moves": len(demos),
-                           "demo_seconds": round(t1 - t0, 1), "clone_seconds": round(time.monotonic() - t1, 1),
+    out: dict[str, Any] = {"workers": workers, "episodes": demos.episodes, "climbed": demos.climbed,
+                           "moves": len(demos), "demo_seconds": round(t1 - t0, 1),
+                           "clone_seconds": round(time.monotonic() - t1, 1),
                            **{k: round(float(v), 4) for k, v in stats.items() if k != "moves"}}
-
-    def act(obs: np.ndarray, mask: np.ndarray) -> int:  # the policy as it is evaluated: greedy, masked
-        return int(model.predict(obs, action_masks=mask, deterministic=True)[0])
 
     rounds = []
     for r in range(cfg["dagger_rounds"]):  # DAgger: the planner labels the states the policy reaches
         t2 = time.monotonic()
-        labelled, seen = policy_labels(make, env_kwargs, act, cfg["dagger_episodes"], seed=seed + _DAGGER_SEED + r,
-                                         weight=cfg["teacher_weight"])
+        # the policy as it is evaluated (greedy, masked), copied to the workers as it is now
+        labelled, seen = policy_labels(make, env_kwargs, GreedyPolicy(model.policy), cfg["dagger_episodes"],
+                                       seed=seed + _DAGGER_SEED + r, weight=cfg["teacher_weight"], workers=workers)
         demos = demos.joined(labelled)
         fit = clone(model.policy, demos, epochs=cfg["dagger_epochs"], batch_size=cfg["batch_size"],
                     vf_coef=cfg["vf_coef"], max_grad_norm=cfg["max_grad_norm"], seed=seed + 1 + r)

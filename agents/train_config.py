@@ -155,6 +155,8 @@ TRAIN_SCHEMA: dict[str, _configs.Spec] = {
                         doc="after cloning: rounds of the policy climbing, the planner labelling (agents.pretrain)"),
     "dagger_episodes": _N(lo=1, hi=100_000, integer=True, default=300, doc="policy climbs labelled per round"),
     "dagger_epochs": _N(lo=1, hi=1000, integer=True, default=10, doc="passes over all rows after each round"),
+    "warm_start_workers": _N(lo=1, hi=64, integer=True, default=1,
+                             doc="processes that share the warm start's and DAgger's climbs (agents.pretrain)"),
     "teacher_weight": _N(lo=1.0, hi=10.0, default=2.0,
                          doc="A* weight of the planner that demonstrates and labels (1 = shortest routes, slower)"),
 }

@@ -81,14 +81,16 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
 
     seen: dict = {}
 
-    def fake_demos(make, env_kwargs, episodes, seed, gamma, weight):  # noqa: ANN001, ANN202
+    def fake_demos(make, env_kwargs, episodes, seed, gamma, weight, workers):  # noqa: ANN001, ANN202
         seen.update(env_kwargs)
         weights.append(weight)
+        shared.append(workers)
         return demos
 
-    def fake_labels(make, env_kwargs, act, episodes, seed, weight):  # noqa: ANN001, ANN202
+    def fake_labels(make, env_kwargs, act, episodes, seed, weight, workers):  # noqa: ANN001, ANN202
         seen_labels.update(env_kwargs)
         weights.append(weight)
+        shared.append(workers)
         picked = act(demos.obs[0], demos.masks[0])
         assert demos.masks[0][picked]  # the policy's move is one the env offered
         return Demos(demos.obs[:3], demos.actions[:3], demos.masks[:3], np.full(3, np.nan, np.float32), 1, 0), {
@@ -96,6 +98,7 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
 
     seen_labels: dict = {}
     weights: list[float] = []
+    shared: list[int] = []
     monkeypatch.setattr(P, "planner_demos", fake_demos)
     monkeypatch.setattr(P, "policy_labels", fake_labels)
     from sb3_contrib import MaskablePPO
@@ -111,6 +114,8 @@ def test_a_physics_run_is_warm_started_from_kinematic_climbs_of_its_own_pool(mon
     assert [r["rows"] for r in got["dagger"]] == [len(demos) + 3 * (r + 1) for r in range(cfg["dagger_rounds"])]
     # the config's teacher demonstrates and labels (the default: the planner near its shortest routes)
     assert weights == [cfg["teacher_weight"]] * (1 + cfg["dagger_rounds"]) and cfg["teacher_weight"] == 1.1
+    # and two processes share every one of those runs (the config's: both cores)
+    assert shared == [2] * (1 + cfg["dagger_rounds"]) and got["workers"] == 2
 
 
 def test_a_teacher_nearer_the_shortest_routes_demonstrates_shorter_climbs() -> None:
@@ -156,3 +161,37 @@ def test_cloning_rows_without_a_return_fits_the_critic_on_the_others(demos: Demo
     fit = clone(model.policy, both, epochs=60, batch_size=64, seed=0)
     assert np.isfinite(fit["value_mse"]) and fit["value_mse"] < 8.0  # half the rows' error, NaN rows left out
     assert fit["agreement"] >= 0.9
+
+
+def test_climbs_shared_among_processes_are_one_process_s_runs_joined(demos: Demos) -> None:
+    """Two processes share five climbs as runs of 3 and 2 (the second's first reset seeded
+    ``seed + CHUNK_SEED``): the rows are those runs made in this process, in run order - for
+    the planner's demonstrations and for a DAgger round of a policy pickled into the workers."""
+    import pickle
+
+    from sb3_contrib import MaskablePPO
+
+    from kinegym.agents.pretrain import CHUNK_SEED, GreedyPolicy
+
+    two = planner_demos(T.make_env, KW, episodes=5, seed=5, gamma=0.98, workers=2)
+    one = planner_demos(T.make_env, KW, episodes=3, seed=5, gamma=0.98).joined(
+        planner_demos(T.make_env, KW, episodes=2, seed=5 + CHUNK_SEED, gamma=0.98))
+    assert (two.episodes, two.climbed) == (5, 5) and len(two) == len(one)
+    for a, b in [(two.obs, one.obs), (two.actions, one.actions), (two.masks, one.masks), (two.returns, one.returns)]:
+        assert np.array_equal(a, b)
+    assert not np.array_equal(two.obs[: len(demos)], demos.obs[: len(two)])  # not one run of five from seed 5
+
+    model = MaskablePPO("MlpPolicy", T.make_env(**KW), seed=3, device="cpu", policy_kwargs={"net_arch": [16]})
+    clone(model.policy, demos, epochs=2, batch_size=32)
+    act = GreedyPolicy(model.policy)
+    copy = pickle.loads(pickle.dumps(act))  # as a worker gets it: rebuilt from class, parameters and weights
+    assert copy.policy is not model.policy
+    assert [copy(o, m) for o, m in zip(demos.obs, demos.masks)] == [act(o, m) for o, m in zip(demos.obs, demos.masks)]
+    got, stats = policy_labels(T.make_env, KW, act, episodes=3, seed=11, weight=1.1, workers=2)
+    a, sa = policy_labels(T.make_env, KW, act, episodes=2, seed=11, weight=1.1)
+    b, sb = policy_labels(T.make_env, KW, act, episodes=1, seed=11 + CHUNK_SEED, weight=1.1)
+    assert stats == {k: sa[k] + sb[k] for k in sa} and got.episodes == 3
+    assert np.array_equal(got.obs, np.concatenate([a.obs, b.obs]))
+    assert np.array_equal(got.actions, np.concatenate([a.actions, b.actions]))
+    with pytest.raises(ValueError, match="workers=0"):
+        planner_demos(T.make_env, KW, episodes=2, seed=0, gamma=0.98, workers=0)
