@@ -37,13 +37,14 @@ them.
 
 from __future__ import annotations
 
-import multiprocessing
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
+
+from .parallel import in_order
 
 
 @dataclass
@@ -85,18 +86,13 @@ def _runs(episodes: int, seed: int, workers: int) -> list[tuple[int, int]]:
 
 def _shared(job: Callable[..., Any], runs: Sequence[tuple[int, int]], args: tuple,
             progress: Callable[[int], None] | None) -> list[Any]:
-    """``job(*args, episodes, seed)`` for each run, in this process for one run, else each in a
-    forkserver process; the results in run order (``progress(n)`` as each run of ``n`` ends)."""
+    """``job(*args, run)`` for each ``run = (episodes, seed)``, in this process for one run (with
+    ``progress``), else each in a forkserver process (:func:`kinegym.agents.parallel.in_order`);
+    the results in run order (``progress(n)`` as each run of ``n`` ends)."""
     if len(runs) == 1:
-        return [job(*args, *runs[0], progress=progress)]
-    with ProcessPoolExecutor(len(runs), mp_context=multiprocessing.get_context("forkserver")) as pool:
-        futures = [pool.submit(job, *args, n, s) for n, s in runs]
-        out = []
-        for f, (n, _) in zip(futures, runs):
-            out.append(f.result())
-            if progress is not None:
-                progress(n)
-        return out
+        return [job(*args, runs[0], progress=progress)]
+    done = None if progress is None else (lambda run: progress(run[0]))
+    return in_order(partial(job, *args), runs, len(runs), done, start_method="forkserver")
 
 
 class GreedyPolicy:
@@ -166,11 +162,12 @@ def _joined(parts: Sequence[Demos]) -> Demos:
 
 
 def _planner_run(make_env: Callable[..., Any], env_kwargs: dict[str, Any], gamma: float, weight: float,
-                 episodes: int, seed: int, progress: Callable[[int], None] | None = None) -> Demos:
-    """One process's share of :func:`planner_demos`."""
+                 run: tuple[int, int], progress: Callable[[int], None] | None = None) -> Demos:
+    """One process's share of :func:`planner_demos`: ``run = (episodes, seed)``."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.rollout import run_episode
 
+    episodes, seed = run
     env = make_env(**env_kwargs)
     obs_rows: list[np.ndarray] = []
     acts: list[int] = []
@@ -239,11 +236,12 @@ def policy_labels(make_env: Callable[..., Any], env_kwargs: dict[str, Any],
 
 
 def _label_run(make_env: Callable[..., Any], env_kwargs: dict[str, Any], act: Callable[[np.ndarray, np.ndarray], int],
-               weight: float, episodes: int, seed: int,
+               weight: float, run: tuple[int, int],
                progress: Callable[[int], None] | None = None) -> tuple[Demos, dict[str, int]]:
-    """One process's share of :func:`policy_labels`."""
+    """One process's share of :func:`policy_labels`: ``run = (episodes, seed)``."""
     from kinegym.agents.rollout import run_episode
 
+    episodes, seed = run
     rows: tuple[list, list, list] = ([], [], [])
     stats = {"states": 0, "no_route": 0, "differed": 0, "climbed": 0}
     env = make_env(**env_kwargs)

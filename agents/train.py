@@ -43,7 +43,7 @@ evaluate gait`` and ``kinegym tune gait`` (also ``python -m kinegym train gait .
   every function takes (default :func:`make_env`: ``gymnasium.make(ENV_ID, ...)``, the id
   the ``kinegym`` package registers when any ``kinegym.*`` module is imported). Pass your
   own to train on a wrapped or modified env; it must be a module-level function when
-  ``n_envs > 1`` (the worker processes unpickle it).
+  ``n_envs > 1`` or ``warm_start_workers > 1`` (the worker processes unpickle it).
 """
 
 from __future__ import annotations

@@ -30,13 +30,11 @@ from __future__ import annotations
 import argparse
 import io
 import json
-import multiprocessing as mp
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
 
 import numpy as np
 
@@ -53,12 +51,13 @@ from kinegym.vision.cell_model import (
 )
 from kinegym.vision.ink import _apply
 
+from .parallel import in_order
+
 __all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "expected_calibration_error", "main"]
 
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
 #: channels of the network's three convolutions
 CONVS = (16, 32, 64)
-J, R = TypeVar("J"), TypeVar("R")
 _MAX_CACHE_BYTES = 2 << 30  # 100,000 photos' cells, compressed, stay well under this
 
 
@@ -73,21 +72,6 @@ class _Ticker:
         if self.enabled and (self.done * 10 // self.total > (self.done - 1) * 10 // self.total):
             print(f"  {self.what}: {self.done}/{self.total}, {time.perf_counter() - self.t0:.0f} s", file=sys.stderr,
                   flush=True)
-
-
-def in_order(fn: Callable[[J], R], jobs: Sequence[J], workers: int, bar: _Ticker) -> list[R]:
-    """``fn`` of every job, in the jobs' order, in ``workers`` spawned processes (1: here)."""
-    out: list[R] = []
-    if workers > 1:
-        with mp.get_context("spawn").Pool(workers) as pool:
-            for res in pool.imap(fn, jobs, chunksize=4):
-                out.append(res)
-                bar.update()
-    else:
-        for job in jobs:
-            out.append(fn(job))
-            bar.update()
-    return out
 
 
 @dataclass
@@ -158,7 +142,8 @@ def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True, 
     jobs = [("real-like", REAL_LIKE_SEED + i, all_grids) for i in range(real_like)] + [
         ("hard", HARD_SEED + i, all_grids) for i in range(hard)]
     xs, ys, ids = [], [], []
-    results = in_order(_scene_cells, jobs, workers, _Ticker(len(jobs), "photos", progress))
+    bar = _Ticker(len(jobs), "photos", progress)
+    results = in_order(_scene_cells, jobs, workers, lambda _: bar.update(), chunksize=4)
     for k, res in enumerate(results):
         if res is not None:
             xs.append(res[0])

@@ -38,7 +38,8 @@ import numpy as np
 from kinegym.vision.board_reader import BoardReader, NoBoardError
 from kinegym.vision.grid_choice import FEATURES, KINDS, SHIPPED_ARBITER, GridArbiter, features
 
-from .train_cells import _Ticker, in_order
+from .parallel import in_order
+from .train_cells import _Ticker
 
 __all__ = ["collect", "fit", "choose", "train", "main"]
 
@@ -81,7 +82,8 @@ def collect(real_like: int, hard: int, workers: int = 2, progress: bool = True, 
     m = tuple(str(p) for p in models)
     jobs = [("real-like", REAL_LIKE_SEED + i, m) for i in range(real_like)] + [("hard", HARD_SEED + i, m)
                                                                               for i in range(hard)]
-    return in_order(_scene_hypotheses, jobs, workers, _Ticker(len(jobs), "photos", progress))
+    bar = _Ticker(len(jobs), "photos", progress)
+    return in_order(_scene_hypotheses, jobs, workers, lambda _: bar.update(), chunksize=4)
 
 
 def _load_or_collect(path: str | None, real_like: int, hard: int, workers: int, progress: bool,
