@@ -539,9 +539,21 @@ def estimate_train_s(cfg: dict[str, Any], sps: float, timesteps: int | None = No
     """Rough seconds to train ``cfg`` (``timesteps`` or its own): the env steps on the envs
     that run in parallel, the policy and PPO's updates (measured: about 1.5x the env time on top),
     the validation evaluations."""
+    steps = cfg["n_timesteps"] if timesteps is None else timesteps
+    evals = steps // max(cfg["eval_freq"], 1)
+    return 2.5 * steps / (sps * _parallel(cfg["n_envs"])) + evals * cfg["eval_episodes"] * TYPICAL_EPISODE / sps
+
+
+def estimate_warm_start_s(cfg: dict[str, Any]) -> tuple[float, float]:
+    """Rough seconds of ``cfg``'s warm start: the planner's demonstrations, then the DAgger
+    rounds, shared by ``warm_start_workers`` processes on as many cores as there are."""
+    k = _parallel(cfg["warm_start_workers"])
+    return (BC_SECONDS_PER_EPISODE * cfg["bc_episodes"] / k,
+            DAGGER_SECONDS_PER_EPISODE * cfg["dagger_episodes"] * cfg["dagger_rounds"] / k)
+
+
+def _parallel(processes: int) -> int:
+    """How many of ``processes`` run at once: no more than this machine's cores."""
     import os
 
-    steps = cfg["n_timesteps"] if timesteps is None else timesteps
-    parallel = max(1, min(cfg["n_envs"], os.cpu_count() or 1))
-    evals = steps // max(cfg["eval_freq"], 1)
-    return 2.5 * steps / (sps * parallel) + evals * cfg["eval_episodes"] * TYPICAL_EPISODE / sps
+    return max(1, min(processes, os.cpu_count() or 1))

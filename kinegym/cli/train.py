@@ -73,12 +73,11 @@ def cmd_train(args: argparse.Namespace) -> int:
                        f"{_minutes(est)} here ({sps:.0f} env steps/s measured){limit}")
             if cfg["bc_episodes"]:
                 k = cfg["warm_start_workers"]  # processes sharing the climbs
-                bc_s = T.BC_SECONDS_PER_EPISODE * cfg["bc_episodes"] / k
+                bc_s, dg_s = T.estimate_warm_start_s(cfg)
                 _say(args, f"warm start: the planner climbs {cfg['bc_episodes']:,} training tasks first"
                            f"{f' in {k} processes' if k > 1 else ''} and the policy is fitted to its moves "
                            f"(about {_minutes(bc_s)}, inside --minutes)")
                 if cfg["dagger_rounds"]:
-                    dg_s = T.DAGGER_SECONDS_PER_EPISODE * cfg["dagger_episodes"] * cfg["dagger_rounds"] / k
                     _say(args, f"then DAgger ({cfg['dagger_rounds']} x {cfg['dagger_episodes']:,} climbs): the policy "
                                f"climbs training tasks, the planner labels the states it reaches and the policy is "
                                f"fitted again (about {_minutes(dg_s)})")
