@@ -4,7 +4,10 @@ on the same held-out (or validation) walls, in either mode; one row per agent an
 
 The planner runs at its own A* weight 2 unless asked otherwise (``planner_weight``; 1.1 comes
 within about 1 % of the shortest routes at about three times the cost): "moves vs planner" is
-the mean over the walls both climbed of the policy's moves over the planner's.
+the mean over the walls both climbed of the policy's moves over the planner's. The policy acts
+with its loop guard unless ``loop_guard=False``
+(:class:`~kinegym.agents.policies.MaskedPolicyAgent`); its row counts the decisions the guard
+changed the mask of.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ class EvalRow:
     mean_moves: float
     moves_vs_planner: float
     decision_ms: float
+    #: the policy's decisions where its loop guard withheld a move back into a visited stance
+    guarded: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -52,10 +57,11 @@ class EvalRow:
 
 def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("kinematic",), walls: str = "held-out",
              progress: Callable[[], None] | None = None, make_env: EnvFactory = make_env,
-             planner_weight: float = 2.0) -> list[EvalRow]:
+             planner_weight: float = 2.0, loop_guard: bool = True) -> list[EvalRow]:
     """The policy and the planner, deterministically, on the same walls: ``held-out`` (wall
     ``i`` = ``reset(seed=HELD_OUT_SEED + i)``) or ``validation``. ``planner_weight``: the
-    planner's A* weight; its row is named ``planner`` at 2, else ``planner (weight W)``."""
+    planner's A* weight; its row is named ``planner`` at 2, else ``planner (weight W)``.
+    ``loop_guard``: the policy agent's (:class:`~kinegym.agents.policies.MaskedPolicyAgent`)."""
     from kinegym.agents.gait_planner import PlannerAgent
     from kinegym.agents.policies import MaskedPolicyAgent
     from kinegym.agents.rollout import run_episode
@@ -65,7 +71,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
     check_planner_weight(planner_weight)
     planner = "planner" if planner_weight == 2.0 else f"planner (weight {planner_weight:g})"
     base = HELD_OUT_SEED if walls == "held-out" else VALIDATION_SEED
-    pol = MaskedPolicyAgent(policy)
+    pol = MaskedPolicyAgent(policy, loop_guard=loop_guard)
     rows = []
     env_kwargs = policy_env_kwargs(policy)
     for mode in modes:
@@ -75,6 +81,7 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
                              f"the env {env.observation_space.shape} with env_kwargs {env_kwargs} (no run config.yaml "
                              "beside the model?)")
         results: dict[str, list[dict[str, Any]]] = {"policy": [], "planner": []}
+        guarded_before = pol.guarded
         for i in range(episodes):
             for name in ("planner", "policy"):
                 ep = run_episode(env, PlannerAgent(planner_weight) if name == "planner" else pol, seed=base + i)
@@ -95,5 +102,6 @@ def evaluate(policy: str | Path, episodes: int = 50, modes: Sequence[str] = ("ki
             rows.append(EvalRow(planner if name == "planner" else str(policy), mode, len(res),
                                 len(ok) / len(res), sum(r["falls"] for r in res),
                                 float(np.mean([r["moves"] for r in ok])) if ok else math.nan, ratio,
-                                1000 * float(np.median([r["think"] for r in res]))))
+                                1000 * float(np.median([r["think"] for r in res])),
+                                pol.guarded - guarded_before if name == "policy" else 0))
     return rows

@@ -27,8 +27,8 @@ import numpy as np
 import kinegym.configs as _configs
 from kinegym.configs.io import FileError, read_bytes
 
-__all__ = ["MaskedPolicyAgent", "load_maskable", "read_archive", "policy_env_kwargs", "GAIT_ENV_ID", "POOL_KEYS",
-           "MAX_MODEL_BYTES", "SAFE_KEYS"]
+__all__ = ["MaskedPolicyAgent", "loop_guard_mask", "load_maskable", "read_archive", "policy_env_kwargs", "GAIT_ENV_ID",
+           "POOL_KEYS", "MAX_MODEL_BYTES", "SAFE_KEYS"]
 
 GAIT_ENV_ID = "kinegym/HoleClimb-v0"
 #: env_kwargs of a training wall pool (dropped when a policy is judged: fresh walls)
@@ -115,13 +115,38 @@ def load_maskable(path: str | Path, observation_space: Any, action_space: Any, e
                         "a model trained on an env with the same observation and action spaces") from None
 
 
+def loop_guard_mask(obs: np.ndarray, mask: np.ndarray, layout: dict[str, slice] | None) -> np.ndarray:
+    """``mask`` less the moves into stances the robot already believed itself in this episode
+    (the observation's ``visits_next`` above 0), unless every offered move leads to such a
+    stance; ``mask`` itself where ``layout`` (the env's
+    :func:`~kinegym.envs.hole_climb.observation_layout`) has no visit counts (``memory=False``)."""
+    part = (layout or {}).get("visits_next")
+    if part is None:
+        return mask
+    seen = np.asarray(obs)[part] > 0.0
+    keep = mask & ~seen
+    return keep if keep.any() else mask
+
+
 class MaskedPolicyAgent:
     """A saved sb3-contrib MaskablePPO model acting deterministically with the env's mask.
 
     ``env_kwargs`` (default: those of the model's run, from its ``config.yaml``) make the env
-    whose spaces the model is loaded with."""
+    whose spaces the model is loaded with.
 
-    def __init__(self, path: str | Path, deterministic: bool = True, env_kwargs: dict[str, Any] | None = None) -> None:
+    ``loop_guard`` (default on; it acts only on an env made with ``memory=True``, whose
+    observation counts visits): a move back into a stance the robot already believed itself in
+    this episode is left out of the mask whenever another offered move leads to a stance not
+    yet visited (:func:`loop_guard_mask`). A shortest climb never enters a stance twice; a
+    deterministic policy that does has begun a cycle, and once the observation's counts reach
+    their cap (:data:`~kinegym.envs.hole_climb.VISITS_SEEN`) it cannot see the cycle and repeats
+    it until the episode is truncated. The guard reads only the observation, and acts only where
+    the policy's own choice is such a move: deterministically, it then takes the policy's most
+    probable move among the rest; sampling, it draws from the policy's distribution over the
+    rest (a draw that lands on a move back is drawn again from the rest)."""
+
+    def __init__(self, path: str | Path, deterministic: bool = True, env_kwargs: dict[str, Any] | None = None,
+                 loop_guard: bool = True) -> None:
         from kinegym.envs.hole_climb import HoleClimbEnv
 
         kw = policy_env_kwargs(path) if env_kwargs is None else dict(env_kwargs)
@@ -131,9 +156,17 @@ class MaskedPolicyAgent:
         finally:
             probe.close()
         self.deterministic = deterministic
+        self.loop_guard = bool(loop_guard)
+        self.guarded = 0  #: decisions the loop guard changed, since this agent was made
 
     def act(self, env: Any, obs: np.ndarray | None = None) -> int:
         if obs is None:
             raise ValueError("MaskedPolicyAgent.act needs the observation")
-        action, _ = self.model.predict(obs, action_masks=env.action_masks(), deterministic=self.deterministic)
+        mask = env.action_masks()
+        action, _ = self.model.predict(obs, action_masks=mask, deterministic=self.deterministic)
+        if self.loop_guard:
+            keep = loop_guard_mask(np.asarray(obs), mask, getattr(env, "layout", None))
+            if not keep[int(action)]:  # the policy chose a move back while a fresh stance is offered
+                self.guarded += 1
+                action, _ = self.model.predict(obs, action_masks=keep, deterministic=self.deterministic)
         return int(action)

@@ -52,7 +52,8 @@ arm reach ``R`` (l1 + l2, 20 cm for the seed robot), all relative to the *estima
 
 With ``memory=True`` (what the training config uses) ``3 K + 1`` entries follow (93 in all
 for K = 8; parts `visits_here`, `visits_next`): how many times this episode the robot believed
-itself in its current stance, then per action ``j K + k`` in the stance that move leads to - each ``min(count, 4) / 4``.
+itself in its current stance, then per action ``j K + k`` in the stance that move leads to - each
+``min(count, 4) / 4`` (:data:`VISITS_SEEN` = 4).
 A deterministic policy without them can only cycle once it has looped (they are what the
 gait policy needs to break cycles; see the README's training section).
 
@@ -139,7 +140,10 @@ from kinegym.envs.errors import ResetNeededError, check_action
 from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
 from kinegym.kinematics.holes import HoleMap
 
-__all__ = ["HoleClimbEnv", "WALL_DEFAULTS", "RouteFinder", "observation_layout"]
+__all__ = ["HoleClimbEnv", "WALL_DEFAULTS", "RouteFinder", "observation_layout", "VISITS_SEEN"]
+
+#: Visit counts in the observation (``memory=True``) are ``min(count, VISITS_SEEN) / VISITS_SEEN``.
+VISITS_SEEN = 4
 
 _CLIP = 20.0
 
@@ -323,13 +327,14 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         obs[lay["last_outcome"].start + OUTCOMES.index(self.last_outcome)] = 1.0
         if self.memory:  # how often this episode the robot believed itself in each stance a move leads to
             visits = self._visits
-            obs[lay["visits_here"]] = min(visits.get(stance, 0), 4) / 4.0
+            obs[lay["visits_here"]] = min(visits.get(stance, 0), VISITS_SEEN) / VISITS_SEEN
             nxt_at = lay["visits_next"].start
             for k, h in enumerate(self.cand):
                 if h >= 0:
                     for arm in range(3):
                         nxt = stance[:arm] + (h,) + stance[arm + 1:]
-                        obs[nxt_at + arm * K + k] = min(visits.get(nxt, 0), 4) / 4.0  # type: ignore[arg-type]
+                        seen = min(visits.get(nxt, 0), VISITS_SEEN)  # type: ignore[arg-type]
+                        obs[nxt_at + arm * K + k] = seen / VISITS_SEEN
         if self.hints:  # the map's lower bound on the moves left, now and per move; moves failed here
             hops = self.task.hops
             now = stance_hops(hops, stance)

@@ -18,8 +18,9 @@ from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, em
 __all__ = ["add_parsers", "cmd_climb", "load_policy"]
 
 
-def load_policy(spec: str) -> Any:
-    """``"planner"`` or a MaskablePPO ``.zip``: an object with ``act(env) -> action``."""
+def load_policy(spec: str, loop_guard: bool = True) -> Any:
+    """``"planner"`` or a MaskablePPO ``.zip`` (acting with its loop guard unless ``loop_guard``
+    is False): an object with ``act(env) -> action``."""
     from kinegym.agents.gait_planner import PlannerAgent
 
     if spec == "planner":
@@ -29,7 +30,7 @@ def load_policy(spec: str) -> Any:
         raise UsageError(f"--policy {spec!r} is neither 'planner' nor an existing model file (.zip)")
     from kinegym.agents.policies import MaskedPolicyAgent
 
-    return MaskedPolicyAgent(path)
+    return MaskedPolicyAgent(path, loop_guard=loop_guard)
 
 
 def cmd_climb(args: argparse.Namespace) -> int:
@@ -42,7 +43,7 @@ def cmd_climb(args: argparse.Namespace) -> int:
 
     if args.episodes < 1:
         raise UsageError(f"--episodes {args.episodes} must be >= 1")
-    agent = load_policy(args.policy)
+    agent = load_policy(args.policy, loop_guard=not args.no_loop_guard)
     kwargs: dict[str, Any] = {"mode": args.mode, "robot": args.robot, "wall": args.wall}
     if args.policy != "planner":  # the env as the policy was trained on it (e.g. memory=True)
         from kinegym.agents.train import policy_env_kwargs
@@ -93,6 +94,9 @@ def add_parsers(sub: Any) -> None:
     cl.add_argument("--robot", default="climber", help="robot config (climber_long for the seed's 20 cm wall)")
     cl.add_argument("--policy", default="planner", help="'planner' or a MaskablePPO model .zip")
     cl.add_argument("--mode", default="kinematic", choices=("kinematic", "physics"))
+    cl.add_argument("--no-loop-guard", action="store_true",
+                    help="a policy exactly as trained: without the guard that keeps it from re-entering a stance it "
+                         "has already been in this climb while a move to a fresh one is offered")
     cl.add_argument("--episodes", type=int, default=5)
     cl.add_argument("--seed", type=int, default=0, help="seed of the first episode (then +1 per episode)")
     cl.add_argument("--gif", default=None, help="animate the first episode (.gif, or .mp4 with kinegym[video])")

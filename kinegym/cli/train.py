@@ -141,19 +141,23 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     with Progress(args.episodes * len(modes), "evaluate (policy and planner on the same walls)",
                   enabled=not args.json) as bar:
         rows = evaluate(args.policy, args.episodes, modes, args.walls, progress=bar.update,
-                        planner_weight=args.planner_weight)
+                        planner_weight=args.planner_weight, loop_guard=not args.no_loop_guard)
 
     def f(v: float, fmt: str) -> str:
         return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
 
     base = T.HELD_OUT_SEED if args.walls == "held-out" else T.VALIDATION_SEED
-    lines = [f"HoleClimb-v0, {args.episodes} {args.walls} walls (wall i = reset(seed={base} + i)), deterministic",
+    guard = "off (--no-loop-guard)" if args.no_loop_guard else "on"
+    lines = [f"HoleClimb-v0, {args.episodes} {args.walls} walls (wall i = reset(seed={base} + i)), deterministic, "
+             f"the policy's loop guard {guard}",
              f"{'agent':<40} {'mode':<10} {'success':>8} {'falls':>6} {'moves':>7} {'vs planner':>11} {'ms/move':>8}"]
     for r in rows:
         name = r.agent if len(r.agent) <= 40 else "..." + r.agent[-37:]
         lines.append(f"{name:<40} {r.mode:<10} {r.success:>8.1%} {r.falls:>6} {f(r.mean_moves, '.1f'):>7} "
-                     f"{f(r.moves_vs_planner, '.2f') + 'x':>11} {r.decision_ms:>8.2f}")
-    emit(args, {"walls": args.walls, "episodes": args.episodes, "rows": [r.as_dict() for r in rows]},
+                     f"{f(r.moves_vs_planner, '.2f') + 'x':>11} {r.decision_ms:>8.2f}"
+                     + (f"  (the loop guard changed {r.guarded} decisions)" if r.guarded else ""))
+    emit(args, {"walls": args.walls, "episodes": args.episodes, "loop_guard": not args.no_loop_guard,
+                "rows": [r.as_dict() for r in rows]},
           "\n".join(lines))
     return EXIT_OK
 
@@ -252,6 +256,9 @@ def add_parsers(sub: Any) -> None:
     ev.add_argument("--planner-weight", type=float, default=2.0,
                     help="the planner's A* weight (default 2, its own; 1.1: within about 1%% of the shortest routes, "
                          "the training config's teacher)")
+    ev.add_argument("--no-loop-guard", action="store_true",
+                    help="the policy exactly as trained: without the guard that keeps it from re-entering a stance "
+                         "it has already been in this climb while a move to a fresh one is offered")
     add_json(ev)
     ev.set_defaults(func=cmd_evaluate)
 
