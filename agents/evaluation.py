@@ -7,7 +7,7 @@ within about 1 % of the shortest routes at about three times the cost): "moves v
 the mean over the walls both climbed of the policy's moves over the planner's. The policy acts
 with its loop guard unless ``loop_guard=False``
 (:class:`~kinegym.agents.policies.MaskedPolicyAgent`); its row counts the decisions the guard
-changed the mask of.
+changed.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ class EvalRow:
     mean_moves: float
     moves_vs_planner: float
     decision_ms: float
-    #: the policy's decisions where its loop guard withheld a move back into a visited stance
+    #: the policy's decisions its loop guard changed (its own choice was a move back into a visited stance)
     guarded: int = 0
 
     def as_dict(self) -> dict[str, Any]:
