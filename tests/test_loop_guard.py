@@ -5,9 +5,11 @@ is the policy's own."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from kinegym.agents.policies import MaskedPolicyAgent, loop_guard_mask
 from kinegym.envs.hole_climb import VISITS_SEEN, HoleClimbEnv, observation_layout
@@ -65,19 +67,27 @@ def test_an_untrained_policy_that_cycles_is_kept_out_of_its_cycle(tmp_path: Path
     assert guard.guarded > 0 and max(guarded.values()) < max(unguarded.values())
 
 
-def test_evaluate_reports_what_the_guard_changed_and_can_leave_it_off(tmp_path: Path) -> None:
-    """``evaluate`` (``kinegym evaluate gait``) acts with the guard unless told not to, and its
-    policy row counts the decisions the guard changed; the planner's row never has any."""
+def test_evaluate_reports_what_the_guard_changed_and_can_leave_it_off(tmp_path: Path,
+                                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """``kinegym evaluate gait`` acts with the guard unless ``--no-loop-guard``, and its policy row
+    counts the decisions the guard changed; the planner's row never has any."""
     import yaml
     from sb3_contrib import MaskablePPO
 
-    from kinegym.agents.evaluation import evaluate
     from kinegym.agents.policies import GAIT_ENV_ID
+    from kinegym.cli import main
 
     MaskablePPO("MlpPolicy", HoleClimbEnv(memory=True), seed=3, device="cpu").save(tmp_path / "fresh.zip")
     (tmp_path / "config.yaml").write_text(yaml.safe_dump({GAIT_ENV_ID: {"env_kwargs": {"memory": True}}}))
-    rows = {(r.agent == "planner", guard): r for guard in (True, False)
-            for r in evaluate(tmp_path / "fresh.zip", episodes=2, loop_guard=guard)}
-    assert rows[(False, True)].guarded > 0 and rows[(False, False)].guarded == 0
-    assert rows[(True, True)].guarded == rows[(True, False)].guarded == 0
-    assert rows[(True, True)].mean_moves == rows[(True, False)].mean_moves  # the planner is not guarded
+    rows = {}
+    for flags in ((), ("--no-loop-guard",)):
+        argv = ["evaluate", "gait", "--policy", str(tmp_path / "fresh.zip"), "--episodes", "2", "--mode", "kinematic",
+                "--json", *flags]
+        assert main(argv) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert out["loop_guard"] is not bool(flags)
+        for r in out["rows"]:
+            rows[(r["agent"] == "planner", not flags)] = r
+    assert rows[(False, True)]["guarded"] > 0 and rows[(False, False)]["guarded"] == 0
+    assert rows[(True, True)]["guarded"] == rows[(True, False)]["guarded"] == 0
+    assert rows[(True, True)]["mean_moves"] == rows[(True, False)]["mean_moves"]  # the planner is not guarded

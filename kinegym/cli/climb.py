@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit
+from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, add_no_loop_guard, emit
 
 __all__ = ["add_parsers", "cmd_climb", "load_policy"]
 
@@ -94,9 +94,7 @@ def add_parsers(sub: Any) -> None:
     cl.add_argument("--robot", default="climber", help="robot config (climber_long for the seed's 20 cm wall)")
     cl.add_argument("--policy", default="planner", help="'planner' or a MaskablePPO model .zip")
     cl.add_argument("--mode", default="kinematic", choices=("kinematic", "physics"))
-    cl.add_argument("--no-loop-guard", action="store_true",
-                    help="a policy exactly as trained: without the guard that keeps it from re-entering a stance it "
-                         "has already been in this climb while a move to a fresh one is offered")
+    add_no_loop_guard(cl)
     cl.add_argument("--episodes", type=int, default=5)
     cl.add_argument("--seed", type=int, default=0, help="seed of the first episode (then +1 per episode)")
     cl.add_argument("--gif", default=None, help="animate the first episode (.gif, or .mp4 with kinegym[video])")

@@ -20,7 +20,8 @@ from typing import Any, NoReturn
 import numpy as np
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_NO_ANSWER", "EXIT_BROKEN_INSTALL", "UsageError", "Parser",
-           "parse_floats", "parse_triples", "emit", "rnd", "add_json", "write_text_atomic", "out_dir"]
+           "parse_floats", "parse_triples", "emit", "rnd", "add_json", "add_no_loop_guard", "write_text_atomic",
+           "out_dir"]
 
 EXIT_OK, EXIT_BROKEN_INSTALL, EXIT_USAGE, EXIT_NO_ANSWER = 0, 1, 2, 3
 
@@ -87,6 +88,14 @@ def rnd(x: Any, nd: int = 6) -> Any:
 def add_json(sp: argparse.ArgumentParser) -> None:
     """The ``--json`` switch every command has."""
     sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_no_loop_guard(sp: argparse.ArgumentParser) -> None:
+    """The ``--no-loop-guard`` switch of the commands that run a trained gait policy
+    (:class:`kinegym.agents.policies.MaskedPolicyAgent`'s ``loop_guard``)."""
+    sp.add_argument("--no-loop-guard", action="store_true",
+                    help="a policy exactly as trained: without the guard that keeps it from re-entering a stance it "
+                         "has already been in this climb while a move to a fresh one is offered")
 
 
 def out_dir(path: str | Path, option: str = "--out") -> Path:

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from kinegym.cli.common import EXIT_OK, UsageError, add_json, emit, out_dir
+from kinegym.cli.common import EXIT_OK, UsageError, add_json, add_no_loop_guard, emit, out_dir
 from kinegym.configs import load_yaml
 
 __all__ = ["add_parsers"]
@@ -256,9 +256,7 @@ def add_parsers(sub: Any) -> None:
     ev.add_argument("--planner-weight", type=float, default=2.0,
                     help="the planner's A* weight (default 2, its own; 1.1: within about 1%% of the shortest routes, "
                          "the training config's teacher)")
-    ev.add_argument("--no-loop-guard", action="store_true",
-                    help="the policy exactly as trained: without the guard that keeps it from re-entering a stance "
-                         "it has already been in this climb while a move to a fresh one is offered")
+    add_no_loop_guard(ev)
     add_json(ev)
     ev.set_defaults(func=cmd_evaluate)
 
