@@ -158,10 +158,10 @@ class BoardReader:
             trace["hypotheses"] = [(h.kind, h.p) for h in made]
             trace["count_changed"] = [(int(r), int(c)) for r, c in np.argwhere(cells != best.probs.argmax(axis=-1))]
         scale, H, err = best.scale, best.H, best.err
-        if scale < 1.0:
-            H = np.diag([1 / scale, 1 / scale, 1.0]) @ H
-            err /= scale
-        return BoardReading(cells.astype(np.int64), conf, best.probs, H, float(err), best.npts, best.frame, best.feats)
+        if scale < 1.0:  # the working copy's px to the photo's
+            H, err = np.diag([1 / scale, 1 / scale, 1.0]) @ H, err / scale
+        return BoardReading(cells.astype(np.int64), conf, best.probs, H, float(err), best.npts, best.frame, best.feats,
+                            None if self.arbiter is None else float(best.p or 0.0))
 
     def hypotheses(self, image: object) -> list[Hypothesis]:
         """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` that finds a grid

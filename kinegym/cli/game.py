@@ -97,6 +97,7 @@ def cmd_match(args: argparse.Namespace) -> int:
 def cmd_read_board(args: argparse.Namespace) -> int:
     from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
     from kinegym.vision.image_io import read_image
+    from kinegym.vision.reading import UNSURE_GRID
 
     path = Path(args.image)
     rgb = read_image(path)
@@ -115,8 +116,12 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     if args.debug:
         _save(debug_image(rgb, r, trace), args.debug)
     rows = r.text().split("|")
+    judged = "" if r.grid_confidence is None else f"; grid confidence {r.grid_confidence:.2f}"
     text = [f"{r.n} x {r.n} board in {path.name} ({ms:.1f} ms; grid fit {r.grid_error_px:.2f} px over "
-            f"{r.grid_points} crossings; lowest cell confidence {r.confidence.min():.2f})"]
+            f"{r.grid_points} crossings{judged}; lowest cell confidence {r.confidence.min():.2f})"]
+    if r.unsure:
+        text.append(f"unsure grid: the reader gives this grid {r.grid_confidence:.2f}, under {UNSURE_GRID} (readings "
+                    "that unsure were almost never right); look at --debug, or take another photo")
     text += ["  " + " ".join(row) for row in rows]
     text.append(f"text form: {r.text()}")
     changed = [list(rc) for rc in trace.get("count_changed", [])]  # type: ignore[attr-defined]
@@ -127,7 +132,8 @@ def cmd_read_board(args: argparse.Namespace) -> int:
         text.append(f"debug picture: {args.debug}")
     emit(args, {"size": r.n, "board": r.text(), "cells": r.cells.tolist(),
                  "confidence": np.round(r.confidence, 4).tolist(), "corners_px": np.round(r.corners(), 2).tolist(),
-                 "grid_error_px": r.grid_error_px, "frame": list(r.frame), "ms": ms, "debug": args.debug,
+                 "grid_error_px": r.grid_error_px, "grid_confidence": r.grid_confidence, "unsure": r.unsure,
+                 "frame": list(r.frame), "ms": ms, "debug": args.debug,
                  "count_changed": changed},
           "\n".join(text))
     return EXIT_OK

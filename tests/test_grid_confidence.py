@@ -1,0 +1,54 @@
+"""The reading's grid confidence: the grid arbiter's probability that the grid it chose, and the
+board read on it, are right - carried by :class:`~kinegym.vision.reading.BoardReading` and said
+by ``kinegym read-board``, so that a user learns when not to trust a reading."""
+
+import json
+from pathlib import Path
+
+import cv2
+import pytest
+
+from kinegym.cli import main
+from kinegym.envs.sim.scenes_real import real_like_scene
+from kinegym.vision.board_reader import BoardReader
+from kinegym.vision.image_io import read_image
+from kinegym.vision.reading import UNSURE_GRID
+
+REAL = Path(__file__).parent / "data" / "real"
+#: A real-like photo whose faint '#' lies in a hard shadow beside a striped reflection: the reader
+#: takes the stripes for a grid and reads a board that is not there (seed 30,024, an empty board).
+STRIPES = 30_024
+
+
+def test_a_reading_carries_the_arbiter_s_probability_of_its_grid() -> None:
+    img = read_image(REAL / "kvuletic2_image4.jpeg")
+    trace: dict[str, object] = {}
+    reading = BoardReader(size=3).read(img, trace)
+    tried = trace["hypotheses"]
+    assert isinstance(tried, list) and tried
+    assert reading.grid_confidence == max(p for _, p in tried)  # the chosen one: the most probable made
+    assert UNSURE_GRID < reading.grid_confidence <= 1.0 and not reading.unsure
+    first = BoardReader(size=3, arbiter=None).read(img)  # the first grid found, judged by no one
+    assert first.grid_confidence is None and not first.unsure
+    assert first.text() == reading.text() == "XO.|.X.|..."
+
+
+def test_a_wrong_grid_is_read_as_unsure() -> None:
+    scene = real_like_scene(STRIPES)
+    reading = BoardReader(size=3).read(scene.image)
+    assert reading.text() != scene.text()  # if this photo ever reads right, pick another wrong one
+    assert reading.unsure and reading.grid_confidence is not None and reading.grid_confidence < UNSURE_GRID
+
+
+def test_read_board_says_an_unsure_grid(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    photo = tmp_path / "stripes.png"  # PNG: the pixels the reader sees in memory above
+    cv2.imwrite(str(photo), real_like_scene(STRIPES).image[..., ::-1])
+    assert main(["read-board", str(photo), "--size", "3", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["unsure"] is True and out["grid_confidence"] < UNSURE_GRID
+    assert main(["read-board", str(photo), "--size", "3"]) == 0
+    text = capsys.readouterr().out
+    assert "unsure grid" in text and "grid confidence 0.0" in text
+    assert main(["read-board", str(REAL / "kvuletic2_image4.jpeg"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["unsure"] is False and out["grid_confidence"] > UNSURE_GRID and out["board"] == "XO.|.X.|..."
