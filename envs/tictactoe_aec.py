@@ -12,7 +12,8 @@ draws the field; when the game ends the arm wipes the board (``erase``).
 Neither agent sees the true board: each sees the board **as read** - a camera photographs it
 (:class:`kinegym.envs.sim.camera.Camera`) and the board reader reads every cell
 (:class:`kinegym.vision.board_reader.BoardReader`). A photo is taken when an agent first
-observes a changed board. A reading is accepted only if it is consistent with the last
+observes a changed board. A reading is accepted only if the reader is sure of its grid
+(:attr:`~kinegym.vision.reading.BoardReading.unsure` false) and it is consistent with the last
 accepted board (every mark seen before still there, the arm's marks where it drew them,
 exactly as many new person marks as were made); otherwise the board is photographed again,
 up to ``max_read_tries`` times, and then the belief keeps the last accepted board plus the
@@ -245,11 +246,12 @@ class TicTacToeDrawAEC(AECEnv):
             except VisionError as exc:
                 err = f"no board found ({exc})"
                 continue
-            err = self._consistent(reading.cells)
+            err = (f"the reader is unsure of its grid ({reading.grid_confidence:.3f})" if reading.unsure
+                   else self._consistent(reading.cells))
             if err is None:
                 cells, conf = reading.cells.astype(np.int64), float(reading.confidence.min())
                 break
-            self.log.append(f"inconsistent reading ({err}): photographing again")
+            self.log.append(f"{'unsure' if reading.unsure else 'inconsistent'} reading ({err}): photographing again")
         if cells is not None:
             self.belief = cells
             self._pending_arm, self._pending_person = [], 0

@@ -16,7 +16,8 @@ strokes with ``draw_physics=False``, for speed). Then the opponent inside the en
 photographs the board (:class:`kinegym.envs.sim.camera.Camera`, preset ``camera``) and the board
 reader (:class:`kinegym.vision.board_reader.BoardReader`) reads every cell as empty, X or O.
 
-A reading is accepted only if it is **consistent** with the last accepted board: every
+A reading is accepted only if the reader is sure of its grid (its arbiter gave it at least
+``kinegym.vision.reading.UNSURE_GRID``) and it is **consistent** with the last accepted board: every
 mark seen before is still there, the arm's new mark is where it drew it, and exactly as
 many new marks of the opponent's symbol as it made - nothing else changed. Otherwise the
 board is photographed again (a new camera sample), up to ``max_read_tries`` times; then

@@ -193,6 +193,27 @@ class _FlakyReader:
         return r
 
 
+class _UnsureReader(_FlakyReader):
+    """Wraps the real reader; the first ``bad`` readings come with a grid confidence of 0.01."""
+
+    def read(self, image: Any) -> Any:
+        r = self.reader.read(image)
+        self.calls += 1
+        if self.calls <= self.bad:
+            r.grid_confidence = 0.01
+        return r
+
+
+def test_a_reading_of_an_unsure_grid_is_photographed_again() -> None:
+    env = gym.make(ENV_ID, **FAST).unwrapped
+    env.reset(seed=9)
+    env.reader = _UnsureReader(env.reader, bad=1)  # its cells are right: only the grid's confidence says no
+    obs, r, term, trunc, info = env.step(12)
+    assert info["read_ok"] and info["read_tries"] == 2 and env.reader.calls == 2
+    assert sum("unsure reading" in s for s in info["status"]) == 1
+    assert info["read_board"] == info["true_board"]
+
+
 def test_misreads_are_retried_then_reported_never_invented() -> None:
     env = gym.make(ENV_ID, **FAST).unwrapped
     env.reset(seed=9)
