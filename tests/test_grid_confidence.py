@@ -6,11 +6,12 @@ import json
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
 from kinegym.cli import main
 from kinegym.envs.sim.scenes_real import real_like_scene
-from kinegym.vision.board_reader import BoardReader
+from kinegym.vision.board_reader import BoardReader, debug_image
 from kinegym.vision.image_io import read_image
 from kinegym.vision.reading import UNSURE_GRID
 
@@ -52,3 +53,20 @@ def test_read_board_says_an_unsure_grid(tmp_path: Path, capsys: pytest.CaptureFi
     assert main(["read-board", str(REAL / "kvuletic2_image4.jpeg"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["unsure"] is False and out["grid_confidence"] > UNSURE_GRID and out["board"] == "XO.|.X.|..."
+
+
+def _red_banner(picture: np.ndarray) -> int:
+    """Pixels of the debug picture's top-left banner drawn in its red (220, 0, 0)."""
+    top = picture[:28, :260].astype(int)
+    return int(((top[..., 0] > 180) & (top[..., 1] < 60) & (top[..., 2] < 60)).sum())
+
+
+def test_the_debug_picture_says_the_grid_s_confidence() -> None:
+    scene = real_like_scene(STRIPES)
+    trace: dict[str, object] = {}
+    unsure = debug_image(scene.image, BoardReader(size=3).read(scene.image, trace), trace)
+    assert _red_banner(unsure) > 40 and _red_banner(scene.image) < 5  # "unsure grid 0.00" in red
+    img = read_image(REAL / "kvuletic2_image4.jpeg")
+    trace = {}
+    sure = debug_image(img, BoardReader(size=3).read(img, trace), trace)
+    assert _red_banner(sure) < 5 and not np.array_equal(sure[:28, :260], img[:28, :260])  # in green

@@ -17,7 +17,8 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
     """An RGB picture of what the reader did: the straight lines it found (columns red,
     rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
     each cell's call with its confidence (orange with a star where the count rule called the cell
-    otherwise than its own most probable call) - or, without a board, the reason in red."""
+    otherwise than its own most probable call), the grid's confidence at the top left (red: an
+    unsure grid) - or, without a board, the reason in red."""
     img = _as_rgb(image).copy()
     k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
     for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
@@ -50,6 +51,11 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
                 changed = (r, c) in changed_cells  # called so by the count rule: orange
                 cv2.putText(img, label + "*" * changed, (p[0] - 16, p[1] + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.38,
                             (230, 120, 0) if changed else (0, 120, 0), 1, cv2.LINE_AA)
+    if reading is not None and reading.grid_confidence is not None:  # the arbiter's word on the grid
+        unsure = reading.unsure
+        text = f"{'unsure grid' if unsure else 'grid confidence'} {reading.grid_confidence:.2f}"
+        cv2.putText(img, text, (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0) if unsure else (0, 120, 0), 1,
+                    cv2.LINE_AA)
     if error:
         cv2.putText(img, error[:90], (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0), 1, cv2.LINE_AA)
     return img
