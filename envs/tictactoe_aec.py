@@ -230,6 +230,7 @@ class TicTacToeDrawAEC(AECEnv):
             return
         from kinegym.envs.sim.camera import Camera
         from kinegym.vision.errors import VisionError
+        from kinegym.vision.reading import UNSURE_GRID
 
         self._stale = False
         self._history.append(("read", None))  # photos draw from the generator: a replay takes them too
@@ -246,7 +247,7 @@ class TicTacToeDrawAEC(AECEnv):
             except VisionError as exc:
                 err = f"no board found ({exc})"
                 continue
-            err = (f"the reader is unsure of its grid ({reading.grid_confidence:.3f})" if reading.unsure
+            err = (f"grid confidence {reading.grid_confidence:.3f}, under {UNSURE_GRID}" if reading.unsure
                    else self._consistent(reading.cells))
             if err is None:
                 cells, conf = reading.cells.astype(np.int64), float(reading.confidence.min())

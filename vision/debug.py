@@ -54,8 +54,8 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
     if reading is not None and reading.grid_confidence is not None:  # the arbiter's word on the grid
         unsure = reading.unsure
         text = f"{'unsure grid' if unsure else 'grid confidence'} {reading.grid_confidence:.2f}"
-        cv2.putText(img, text, (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0) if unsure else (0, 120, 0), 1,
-                    cv2.LINE_AA)
+        cv2.putText(img, text, (8, 40 if error else 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5,  # under an error, if any
+                    (220, 0, 0) if unsure else (0, 120, 0), 1, cv2.LINE_AA)
     if error:
         cv2.putText(img, error[:90], (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (220, 0, 0), 1, cv2.LINE_AA)
     return img

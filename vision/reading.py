@@ -15,8 +15,8 @@ __all__ = ["EMPTY", "X", "O", "UNSURE_GRID", "BoardReading"]
 EMPTY, X, O = 0, 1, 2
 #: A grid the arbiter gives less than this is probably wrong: of 400 rendered real-like photos
 #: (seeds 20,000-20,199 and 30,000-30,199) none of the 20 readings under 0.1 was right, 30 % of
-#: those at 0.1-0.3 and 99 % of those at 0.88 or more; of 120 real photos (the 15 of
-#: ``tests/data/real`` as taken and under seven turns and keystones) none read under 0.05.
+#: those at 0.1-0.3 and 99 % of those at 0.88 or more; of 120 readings of real photos (the 15 of
+#: ``tests/data/real`` as taken and under seven turns and keystones) none was under 0.05.
 UNSURE_GRID = 0.05
 _SYMBOL = {EMPTY: ".", X: "X", O: "O"}
 
