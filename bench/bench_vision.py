@@ -157,11 +157,12 @@ def real_like(count: int) -> None:
               f"{np.mean([r[4] for r in res]):.2f} |", flush=True)
 
 
-def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], bool | None]]:
+def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:
     """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
-    ``(label, transform(img, i), mirrored)``; ``mirrored``: the board's columns read reversed;
-    None: turned so far that a photo's own turn may pass 45 deg, where the reader reads the board
-    turned by a quarter (its documented order), so any quarter turn of the label counts right."""
+    ``(label, transform(img, i), readings(board))``; ``readings``: the board texts that count as
+    right for the labelled ``board`` - itself; its columns reversed when mirrored; any quarter
+    turn when turned so far that a photo's own turn may pass 45 deg, where the reader reads the
+    board turned by a quarter (its documented order)."""
     import cv2
 
     def size(side: int) -> Callable[[np.ndarray, int], np.ndarray]:
@@ -207,23 +208,32 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
         buf = cv2.imencode(".jpg", img[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, quality])[1]
         return np.ascontiguousarray(cv2.imdecode(buf, cv2.IMREAD_COLOR)[..., ::-1])
 
-    return [("as taken, 577 x 433", lambda img, i: img, False), ("enlarged to 960 x 720", size(960), False),
-            ("enlarged to 4000 x 3000", size(4000), False),
-            *((f"as taken, white noise of {v} grey levels added", noise(v), False) for v in (5, 8, 12)),
-            ("keystone, top 20 % narrower", lambda img, i: keystone(img, True), False),
-            ("keystone, left side 20 % shorter", lambda img, i: keystone(img, False), False),
+    return [("as taken, 577 x 433", lambda img, i: img, _as_labelled),
+            ("enlarged to 960 x 720", size(960), _as_labelled),
+            ("enlarged to 4000 x 3000", size(4000), _as_labelled),
+            *((f"as taken, white noise of {v} grey levels added", noise(v), _as_labelled) for v in (5, 8, 12)),
+            ("keystone, top 20 % narrower", lambda img, i: keystone(img, True), _as_labelled),
+            ("keystone, left side 20 % shorter", lambda img, i: keystone(img, False), _as_labelled),
             ("blurred, Gaussian 3 px at 960 x 720", lambda img, i: cv2.GaussianBlur(size(960)(img, i), (0, 0), 3.0),
-             False),
-            ("JPEG quality 25", lambda img, i: jpeg(img, 25), False),
-            ("a hard shadow across", lambda img, i: shadow(img), False),
+             _as_labelled),
+            ("JPEG quality 25", lambda img, i: jpeg(img, 25), _as_labelled),
+            ("a hard shadow across", lambda img, i: shadow(img), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
-                1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), False),
-            ("turned 10 deg", lambda img, i: turned(img, 10.0), False),
+                1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), _as_labelled),
+            ("turned 10 deg", lambda img, i: turned(img, 10.0), _as_labelled),
             *((f"turned {v:+d} deg, the canvas grown (read turned counts)", lambda img, i, v=v: turned_whole(img, v),
-               None) for v in (15, -15, 30)),
+               _quarter_turns) for v in (15, -15, 30)),
             ("grey, no colour", lambda img, i: cv2.cvtColor(cv2.cvtColor(img, cv2.COLOR_RGB2GRAY), cv2.COLOR_GRAY2RGB),
-             False),
-            ("mirrored", lambda img, i: np.ascontiguousarray(img[:, ::-1]), True)]
+             _as_labelled),
+            ("mirrored", lambda img, i: np.ascontiguousarray(img[:, ::-1]), _mirrored)]
+
+
+def _as_labelled(board: str) -> list[str]:
+    return [board]
+
+
+def _mirrored(board: str) -> list[str]:
+    return ["|".join(row[::-1] for row in board.split("|"))]
 
 
 def _quarter_turns(board: str) -> list[str]:
@@ -248,14 +258,11 @@ def real_photos(repeat: int = 1) -> None:
     reader = BoardReader(size=3)
     print("\n| real dev photos (15, whiteboard) | cells right | boards right | refused | ms per frame median / max |")
     print("|---|---|---|---|---|")
-    for label, transform, mirrored in _photo_conditions():
+    for label, transform, readings in _photo_conditions():
         cells = boards = refused = 0
         times = []
         for i, (name, want) in enumerate(sorted(labels.items())):
             img = transform(read_image(data / name), i)
-            if mirrored:
-                want = "|".join(row[::-1] for row in want.split("|"))
-            wants = [want] if mirrored is not None else _quarter_turns(want)
             best = math.inf
             for _ in range(repeat):
                 t0 = time.perf_counter()
@@ -267,7 +274,7 @@ def real_photos(repeat: int = 1) -> None:
             refused += got == ""
             times.append(best)
             ok = max(([len(got) == len(w) and (a == b or (b == "*" and a in "XO")) for a, b in zip(got, w) if b != "|"]
-                      for w in wants), key=sum)
+                      for w in readings(want)), key=sum)
             cells += sum(ok)
             boards += bool(ok) and all(ok)
         t = np.asarray(times) * 1e3
