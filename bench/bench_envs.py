@@ -18,12 +18,20 @@ Run::
   ``--ttt-games`` seeded games with the default camera (and a quarter as many with the
   hand-held ``hard`` camera), the share of steps whose board as read equals the true board.
 * LunarLander-v3, BipedalWalker-v3: steps per second under random actions.
+
+``--budget`` instead: where a HoleClimb-v0 kinematic step's time goes, part by part (the same
+random valid actions, resets included), against issue 17's budget for a step - BipedalWalker-v3's
+time per step divided by 2.5 - both timed in the same run.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
+import math
 import time
+from collections.abc import Callable
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -37,9 +45,14 @@ from kinegym.envs.sim.gait_kernel import feasible_moves
 from kinegym.kinematics.holes import HoleMap
 
 
-def env_rate(env: gym.Env, seconds: float, masked: bool) -> tuple[float, int]:
+def env_rate(env: gym.Env, seconds: float, masked: bool, start: Callable[[], object] | None = None
+             ) -> tuple[float, int]:
+    """Steps per second of ``env`` under random (valid, with ``masked``) actions, resets included;
+    ``start`` is called when the clock starts (after the first reset)."""
     rng = np.random.default_rng(0)
     obs, info = env.reset(seed=0)
+    if start is not None:
+        start()
     n, t0 = 0, time.perf_counter()
     while time.perf_counter() - t0 < seconds:
         if masked:
@@ -117,6 +130,87 @@ def mask_rates(seconds: float) -> tuple[float, float, int]:
     return rates[0], rates[1], int((answers[0] != answers[1]).sum())
 
 
+def step_parts(seconds: float) -> tuple[float, int, list[tuple[str, float]]]:
+    """Where a HoleClimb-v0 kinematic step's time goes, each part timed where the env calls it
+    over random valid actions with resets: the steps/s (with the timers), the steps, and the
+    parts (name, us per step; resets spread over the steps; the parts add up to the whole)."""
+    from kinegym.envs import climb_robot
+
+    env = gym.make("kinegym/HoleClimb-v0")
+    u = env.unwrapped
+    spent: dict[tuple[str, str], float] = {}
+    within = ["step"]  # whether a part runs inside a step or a reset
+
+    def timed(name: str, fn: Callable[..., Any], phase: str | None = None) -> Callable[..., Any]:
+        @functools.wraps(fn)  # (the env checker reads reset's signature)
+        def run(*a: Any, **k: Any) -> Any:
+            outer = within[0]
+            within[0] = phase or outer
+            t = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                key = (within[0], name)
+                spent[key] = spent.get(key, 0.0) + time.perf_counter() - t
+                within[0] = outer
+        return run
+
+    kernel = climb_robot.feasible_moves
+    climb_robot.feasible_moves = timed("kernel", kernel)  # the gait kernel inside the mask (bench only)
+    try:
+        for obj, name, label in ((u.robot, "options", "mask"), (u.robot, "move", "move"),
+                                 (u.robot, "relocalise", "localiser"), (u, "_obs", "observation"),
+                                 (u, "_info", "info"), (u.task, "new_episode", "new wall")):
+            setattr(obj, name, timed(label, getattr(obj, name)))
+        u.step, u.reset = timed("env", u.step, "step"), timed("env", u.reset, "reset")
+        env.step, env.reset = timed("wrapped", env.step, "step"), timed("wrapped", env.reset, "reset")
+        rate, n = env_rate(env, seconds, True, spent.clear)  # the first reset lies outside the clock
+    finally:
+        climb_robot.feasible_moves = kernel
+    us = {k: 1e6 * v / n for k, v in spent.items()}  # per env step, resets spread over the steps
+
+    def part(phase: str, *names: str) -> float:
+        return sum(us.get((phase, k), 0.0) for k in names)
+
+    inside = part("step", "mask", "move", "localiser", "observation", "info")
+    rows = [("the gait kernel judging a new stance's 24 moves", part("step", "kernel")),
+            ("the rest of the mask (candidate holes, stance cache, failed moves)", part("step", "mask", "kernel") -
+             2 * part("step", "kernel")),
+            ("the move (kinematic climber, judged by the mask)", part("step", "move")),
+            ("the localiser tracking the encoders", part("step", "localiser")),
+            ("the observation", part("step", "observation")), ("the info dict", part("step", "info")),
+            ("the rest of step() (reward, visit counts, checks)", part("step", "env") - inside),
+            ("Gymnasium's wrappers (order enforcing, checker)",
+             part("step", "wrapped", "env") - 2 * part("step", "env")),
+            ("resets: a new wall, proved climbable by the planner", part("reset", "new wall")),
+            ("resets: the rest (hanging the robot, first mask and fix)",
+             part("reset", "wrapped") - part("reset", "new wall"))]
+    return rate, n, rows
+
+
+def step_budget(seconds: float) -> None:
+    """Print :func:`step_parts` against issue 17's budget, 2.5x BipedalWalker-v3's steps/s timed
+    in the same run (without Box2D, the parts alone)."""
+    rate, n, rows = step_parts(seconds)
+    total = sum(v for _, v in rows)
+    try:
+        bip, _ = env_rate(gym.make("BipedalWalker-v3"), seconds, False)
+    except (gym.error.DependencyNotInstalled, ImportError) as err:
+        print(f"HoleClimb-v0 kinematic, random valid actions, {n} steps: {rate:,.0f} steps/s with the timers; "
+              f"BipedalWalker-v3 not installed ({err}): no budget\n")
+        bip = math.nan
+    else:
+        print(f"HoleClimb-v0 kinematic, random valid actions, {n} steps: {rate:,.0f} steps/s with the timers "
+              f"({1e6 / rate:.0f} us a step); BipedalWalker-v3 {bip:,.0f} steps/s ({1e6 / bip:.0f} us); issue 17's "
+              f"budget (2.5x BipedalWalker): {1e6 / (2.5 * bip):.0f} us a step\n")
+    budget = 1e6 / (2.5 * bip)
+    print("| part of a step | us per step | share | x the budget |")
+    print("|---|---|---|---|")
+    for name, v in rows:
+        print(f"| {name} | {v:.1f} | {v / total:.1%} | {v / budget:.2f} |")
+    print(f"| **all** | **{total:.1f}** | 100 % | **{total / budget:.2f}** |")
+
+
 def read_accuracy(games: int, camera: str = "default") -> None:
     """Share of TicTacToeDraw-v0 steps whose accepted reading equals the true board."""
     env = gym.make("kinegym/TicTacToeDraw-v0", draw_physics=False, opponent="thesis", erase=False, camera=camera)
@@ -144,8 +238,12 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=20.0, help="seconds per measurement")
     ap.add_argument("--ttt-games", type=int, default=200, help="games for the TicTacToeDraw reading figure")
     ap.add_argument("--climb-only", action="store_true", help="only the climber and the two anchors")
+    ap.add_argument("--budget", action="store_true", help="only where a HoleClimb-v0 step's time goes")
     args = ap.parse_args()
     s = args.seconds
+    if args.budget:
+        step_budget(s)
+        return
     if not args.climb_only:
         read_accuracy(args.ttt_games)
         read_accuracy(max(1, args.ttt_games // 4), "hard")
