@@ -135,7 +135,7 @@ from gymnasium import spaces
 
 import kinegym.configs as _configs
 from kinegym.envs.climb_robot import ClimbRobot
-from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, WallKwargsSpec, stance_hops
+from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, WallKwargsSpec
 from kinegym.envs.errors import ResetNeededError, check_action
 from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
 from kinegym.kinematics.holes import HoleMap
@@ -328,25 +328,38 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         if self.memory:  # how often this episode the robot believed itself in each stance a move leads to
             visits = self._visits
             obs[lay["visits_here"]] = min(visits.get(stance, 0), VISITS_SEEN) / VISITS_SEEN
-            nxt_at = lay["visits_next"].start
+            seen = [0.0] * (3 * K)
             for k, h in enumerate(self.cand):
                 if h >= 0:
                     for arm in range(3):
                         nxt = stance[:arm] + (h,) + stance[arm + 1:]
-                        seen = min(visits.get(nxt, 0), VISITS_SEEN)  # type: ignore[arg-type]
-                        obs[nxt_at + arm * K + k] = seen / VISITS_SEEN
+                        seen[arm * K + k] = min(visits.get(nxt, 0), VISITS_SEEN) / VISITS_SEEN  # type: ignore[arg-type]
+            obs[lay["visits_next"]] = seen
         if self.hints:  # the map's lower bound on the moves left, now and per move; moves failed here
-            hops = self.task.hops
-            now = stance_hops(hops, stance)
-            obs[lay["hops_now"]] = min(now, 20) / 10.0
-            change_at, failed_at = lay["hops_change"].start, lay["failed_here"].start
-            for k, h in enumerate(self.cand):
-                if h >= 0:
-                    for arm in range(3):
-                        nxt = stance[:arm] + (h,) + stance[arm + 1:]
-                        obs[change_at + arm * K + k] = max(-2, min(2, stance_hops(hops, nxt) - now)) / 2.0
-                        obs[failed_at + arm * K + k] = float((stance, arm, h) in self._failed)
+            obs[lay["hops_now"].start:lay["failed_here"].stop] = self._hints(stance)
         return np.clip(obs, -_CLIP, _CLIP).astype(np.float32)
+
+    def _hints(self, stance: tuple[int, int, int]) -> list[float]:
+        """The ``hints`` part of the observation (``hops_now``, ``hops_change``, ``failed_here``).
+
+        Per move, :func:`~kinegym.envs.climb_task.stance_hops` of the stance it leads to, found from this stance's
+        hop counts with one arm's replaced (the same integers as calling it on each)."""
+        K, hops = self.K, self.task.hops
+        hs = [hops[h] for h in stance]
+        over = [max(0, v - 1) for v in hs]
+        base = sum(over)
+        now = base + (0 if min(hs) == 0 else 1)  # stance_hops(hops, stance)
+        others = (min(hs[1], hs[2]), min(hs[0], hs[2]), min(hs[0], hs[1]))  # the two arms that stay
+        failed = {(arm, h) for st, arm, h in self._failed if st == stance}
+        change, fail = [0.0] * (3 * K), [0.0] * (3 * K)
+        for k, h in enumerate(self.cand):
+            if h >= 0:
+                v = hops[h]
+                for arm in range(3):
+                    after = base - over[arm] + max(0, v - 1) + (0 if min(v, others[arm]) == 0 else 1)
+                    change[arm * K + k] = max(-2, min(2, after - now)) / 2.0
+                    fail[arm * K + k] = float((arm, h) in failed)
+        return [min(now, 20) / 10.0, *change, *fail]
 
     def _info(self, success: bool = False) -> dict[str, Any]:
         ids = self.holes.ids  # type: ignore[union-attr]

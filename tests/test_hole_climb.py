@@ -257,6 +257,39 @@ def test_hint_features_bound_the_moves_left_and_flag_failed_moves() -> None:
     assert obs[m + 1 + 3 * K + bad] == 1.0 and obs[m + 1 + 3 * K:].sum() == 1.0
 
 
+def test_hint_features_equal_stance_hops_of_each_move() -> None:
+    """The env finds each move's bound from the stance's hop counts with one arm's replaced
+    (no call per move); along a random walk with failed moves it equals
+    :func:`stance_hops` of the stance each move leads to, and the failed flags are this
+    stance's failed moves."""
+    from kinegym.envs.climb_task import stance_hops
+
+    env = gym.make("kinegym/HoleClimbMemoryHints-v0", masked="fail")
+    u = env.unwrapped
+    K, m = u.K, 68 + 3 * u.K + 1
+    rng = np.random.default_rng(3)
+    obs, info = env.reset(seed=21)
+    checked = failed = 0
+    for _ in range(400):
+        st, hops = u.believed_stance, u._hops
+        now = stance_hops(hops, st)
+        want = [min(now, 20) / 10] + [0.0] * (6 * K)
+        for k, h in enumerate(u.candidates):
+            for arm in range(3):
+                if h >= 0:
+                    nxt = st[:arm] + (h,) + st[arm + 1:]
+                    want[1 + arm * K + k] = max(-2, min(2, stance_hops(hops, nxt) - now)) / 2
+                    want[1 + 3 * K + arm * K + k] = float((st, arm, h) in u.failed_moves)
+        assert obs[m:].tolist() == np.asarray(want, np.float32).tolist()
+        checked += 1
+        failed += int(obs[m + 1 + 3 * K:].sum())
+        a = int(rng.integers(3 * K)) if rng.random() < 0.2 else int(rng.choice(np.flatnonzero(info["action_mask"])))
+        obs, r, term, trunc, info = env.step(a)
+        if term or trunc:
+            obs, info = env.reset()
+    assert checked == 400 and failed > 0
+
+
 def test_wall_pool_reuses_fixed_tasks_and_stays_deterministic() -> None:
     env = gym.make(ENV_ID, wall_pool=3, wall_pool_seed=7)
     seen = set()
