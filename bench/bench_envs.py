@@ -130,13 +130,17 @@ def mask_rates(seconds: float) -> tuple[float, float, int]:
     return rates[0], rates[1], int((answers[0] != answers[1]).sum())
 
 
-def step_parts(seconds: float) -> tuple[float, int, list[tuple[str, float]]]:
-    """Where a HoleClimb-v0 kinematic step's time goes, each part timed where the env calls it
-    over random valid actions with resets: the steps/s (with the timers), the steps, and the
-    parts (name, us per step; resets spread over the steps; the parts add up to the whole)."""
+def step_parts(seconds: float, env_id: str = "kinegym/HoleClimb-v0", warm: float = 0.0, **kwargs: Any
+               ) -> tuple[float, int, list[tuple[str, float]]]:
+    """Where a HoleClimb kinematic step's time goes, each part timed where the env calls it over
+    random valid actions with resets (after ``warm`` seconds of them untimed: a wall pool's tasks
+    made and their stances judged): the steps/s (with the timers), the steps, and the parts
+    (name, us per step; resets spread over the steps; the parts add up to the whole)."""
     from kinegym.envs import climb_robot
 
-    env = gym.make("kinegym/HoleClimb-v0")
+    env = gym.make(env_id, **kwargs)
+    if warm > 0:
+        env_rate(env, warm, True)
     u = env.unwrapped
     spent: dict[tuple[str, str], float] = {}
     within = ["step"]  # whether a part runs inside a step or a reset
@@ -189,26 +193,28 @@ def step_parts(seconds: float) -> tuple[float, int, list[tuple[str, float]]]:
 
 
 def step_budget(seconds: float) -> None:
-    """Print :func:`step_parts` against issue 17's budget, 2.5x BipedalWalker-v3's steps/s timed
-    in the same run (without Box2D, the parts alone)."""
-    rate, n, rows = step_parts(seconds)
-    total = sum(v for _, v in rows)
+    """Print :func:`step_parts` of HoleClimb-v0 (fresh walls) and of the training config's env
+    (its id, a pool of 20 walls made and judged first: the steady state of training on a pool)
+    against issue 17's budget, 2.5x BipedalWalker-v3's steps/s timed in the same run (without
+    Box2D, the parts alone)."""
+    runs = [("HoleClimb-v0, a fresh wall every reset", step_parts(seconds)),
+            ("HoleClimbMemoryHints-v0, wall_pool=20 (made and judged first)",
+             step_parts(seconds, "kinegym/HoleClimbMemoryHints-v0", warm=2 * seconds, wall_pool=20))]
     try:
-        bip, _ = env_rate(gym.make("BipedalWalker-v3"), seconds, False)
+        bip = env_rate(gym.make("BipedalWalker-v3"), seconds, False)[0]
+        print(f"BipedalWalker-v3: {bip:,.0f} steps/s ({1e6 / bip:.0f} us a step); issue 17's budget (2.5x "
+              f"BipedalWalker-v3): {1e6 / (2.5 * bip):.0f} us a step\n")
     except (gym.error.DependencyNotInstalled, ImportError) as err:
-        print(f"HoleClimb-v0 kinematic, random valid actions, {n} steps: {rate:,.0f} steps/s with the timers; "
-              f"BipedalWalker-v3 not installed ({err}): no budget\n")
+        print(f"BipedalWalker-v3 not installed ({err}): no budget\n")
         bip = math.nan
-    else:
-        print(f"HoleClimb-v0 kinematic, random valid actions, {n} steps: {rate:,.0f} steps/s with the timers "
-              f"({1e6 / rate:.0f} us a step); BipedalWalker-v3 {bip:,.0f} steps/s ({1e6 / bip:.0f} us); issue 17's "
-              f"budget (2.5x BipedalWalker): {1e6 / (2.5 * bip):.0f} us a step\n")
     budget = 1e6 / (2.5 * bip)
-    print("| part of a step | us per step | share | x the budget |")
-    print("|---|---|---|---|")
-    for name, v in rows:
-        print(f"| {name} | {v:.1f} | {v / total:.1%} | {v / budget:.2f} |")
-    print(f"| **all** | **{total:.1f}** | 100 % | **{total / budget:.2f}** |")
+    print("| part of a step, us per step (x the budget) | " + " | ".join(name for name, _ in runs) + " |")
+    print("|---|" + "---|" * len(runs))
+    for i, (part, _) in enumerate(runs[0][1][2]):
+        print(f"| {part} | " + " | ".join(f"{r[2][i][1]:.1f} ({r[2][i][1] / budget:.2f})" for _, r in runs) + " |")
+    totals = [sum(v for _, v in r[2]) for _, r in runs]
+    print("| **a whole step** | " + " | ".join(f"**{t:.1f} ({t / budget:.2f})**" for t in totals) + " |")
+    print("| steps/s with the timers (steps timed) | " + " | ".join(f"{r[0]:,.0f} ({r[1]})" for _, r in runs) + " |")
 
 
 def read_accuracy(games: int, camera: str = "default") -> None:
