@@ -26,7 +26,7 @@ from kinegym.envs.sim.climber_model import ClimberModel
 from kinegym.envs.sim.gait import rest_pose
 from kinegym.kinematics.holes import HoleMap
 
-__all__ = ["ClimbTask", "RouteFinder", "WALL_DEFAULTS", "candidate_holes", "hop_counts", "stance_hops",
+__all__ = ["ClimbTask", "RouteFinder", "WALL_DEFAULTS", "candidate_holes", "hop_counts", "moved_hops", "stance_hops",
            "start_stances"]
 
 #: ``(model, holes, start, goal, candidates) -> moves or None``: how walls are checked for a
@@ -117,6 +117,18 @@ def stance_hops(hops: Sequence[int], stance: Sequence[int]) -> int:
     least ``sum_k max(0, hops_k - 1)`` moves, plus one if no arm holds the goal yet."""
     hs = [hops[h] for h in stance]
     return sum(max(0, v - 1) for v in hs) + (0 if min(hs) == 0 else 1)
+
+
+def moved_hops(hops: Sequence[int], stance: Sequence[int], holes: Sequence[int]) -> list[list[int]]:
+    """:func:`stance_hops` of each stance one move from ``stance`` leads to - arm ``a`` to
+    ``holes[k]`` at ``[a][k]`` (a hole < 0: none, 0) - from the stance's hop counts with one
+    arm's replaced: the same integers as calling it on each, without building the stances."""
+    hs = [hops[h] for h in stance]
+    over = [max(0, v - 1) for v in hs]
+    base = sum(over)
+    stay = (min(hs[1], hs[2]), min(hs[0], hs[2]), min(hs[0], hs[1]))  # the two arms that keep their holes
+    return [[base - over[a] + max(0, hops[h] - 1) + (0 if min(hops[h], stay[a]) == 0 else 1) if h >= 0 else 0
+             for h in holes] for a in range(3)]
 
 
 def start_stances(model: ClimberModel, holes: HoleMap, rows: float = 1.5,

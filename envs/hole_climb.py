@@ -135,7 +135,7 @@ from gymnasium import spaces
 
 import kinegym.configs as _configs
 from kinegym.envs.climb_robot import ClimbRobot
-from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, WallKwargsSpec
+from kinegym.envs.climb_task import WALL_DEFAULTS, ClimbTask, RouteFinder, WallKwargsSpec, moved_hops, stance_hops
 from kinegym.envs.errors import ResetNeededError, check_action
 from kinegym.envs.sim.climber_model import OUTCOMES, ClimberModel
 from kinegym.kinematics.holes import HoleMap
@@ -340,24 +340,16 @@ class HoleClimbEnv(gym.Env[np.ndarray, np.int64]):
         return np.clip(obs, -_CLIP, _CLIP).astype(np.float32)
 
     def _hints(self, stance: tuple[int, int, int]) -> list[float]:
-        """The ``hints`` part of the observation (``hops_now``, ``hops_change``, ``failed_here``).
-
-        Per move, :func:`~kinegym.envs.climb_task.stance_hops` of the stance it leads to, found from this stance's
-        hop counts with one arm's replaced (the same integers as calling it on each)."""
+        """The ``hints`` part of the observation (``hops_now``, ``hops_change``, ``failed_here``)."""
         K, hops = self.K, self.task.hops
-        hs = [hops[h] for h in stance]
-        over = [max(0, v - 1) for v in hs]
-        base = sum(over)
-        now = base + (0 if min(hs) == 0 else 1)  # stance_hops(hops, stance)
-        others = (min(hs[1], hs[2]), min(hs[0], hs[2]), min(hs[0], hs[1]))  # the two arms that stay
+        now = stance_hops(hops, stance)
+        after = moved_hops(hops, stance, self.cand)
         failed = {(arm, h) for st, arm, h in self._failed if st == stance}
         change, fail = [0.0] * (3 * K), [0.0] * (3 * K)
         for k, h in enumerate(self.cand):
             if h >= 0:
-                v = hops[h]
                 for arm in range(3):
-                    after = base - over[arm] + max(0, v - 1) + (0 if min(v, others[arm]) == 0 else 1)
-                    change[arm * K + k] = max(-2, min(2, after - now)) / 2.0
+                    change[arm * K + k] = max(-2, min(2, after[arm][k] - now)) / 2.0
                     fail[arm * K + k] = float((arm, h) in failed)
         return [min(now, 20) / 10.0, *change, *fail]
 
