@@ -70,7 +70,7 @@ from .cells import _probabilities, _remove_grid_lines, board_features
 from .counts import count_rule, most_probable_board
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
-from .grid_choice import KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
+from .grid_choice import KINDS, PAGE_KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
 from .grid_lines import (
     _crossing,
     _crossings,
@@ -84,7 +84,7 @@ from .grid_lines import (
     _union_length,
 )
 from .hand_grid import search_copy
-from .hash_cells import _darkest_near, read_hash
+from .hash_cells import SearchCopy, _darkest_near, read_hash
 from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_colour, ink_map, noise_sigma
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
@@ -164,7 +164,7 @@ class BoardReader:
                             None if self.arbiter is None else float(best.p or 0.0))
 
     def hypotheses(self, image: object) -> list[Hypothesis]:
-        """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` that finds a grid
+        """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` (then ``PAGE_KINDS``) that finds a grid
         (the same grid once), its cells read and its arbiter probability ``p`` (1.0 without an
         arbiter): what :meth:`read` chooses from, for training and inspecting the arbiter."""
         return list(self._hypotheses(image, []))
@@ -186,8 +186,8 @@ class BoardReader:
         diag = math.hypot(h, w)
         d = ink_map(rgb, stroke_px=max(6.0, diag / 100))
         made: list[Hypothesis] = []
-        hashed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        for kind in KINDS:
+        hashed: SearchCopy | None = None
+        for kind in KINDS + PAGE_KINDS:
             sub: dict[str, object] = {}
             try:
                 if kind == "straight":  # straight ruled lines (the lab's and the renderer's boards, frames)
@@ -195,9 +195,9 @@ class BoardReader:
                 else:  # a hand-drawn '#': wavy, converging, unframed lines
                     if hashed is None:
                         small = search_copy(rgb, photo)
-                        stroke = max(6.0, math.hypot(*small.shape[:2]) / 100)
-                        hashed = (small, ink_map(small, stroke_px=stroke), ink_colour(small, stroke_px=stroke))
-                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind], made)
+                        st = max(6.0, math.hypot(*small.shape[:2]) / 100)
+                        hashed = SearchCopy(small, ink_map(small, stroke_px=st), ink_colour(small, stroke_px=st))
+                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind], made, kind in PAGE_KINDS)
             except NoBoardError as exc:
                 reasons.append(f"{'straight lines' if kind == 'straight' else kind}: {exc.reason}")
                 continue

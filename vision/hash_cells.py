@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import cv2
@@ -13,12 +15,13 @@ import numpy as np
 
 from .grid_choice import Hypothesis, same_lattice
 from .hand_grid import HashGrid, crossing_lattice, erase_mask, find_hash_grid
+from .page import page_apart
 from .ruling import clear_rules
 
 if TYPE_CHECKING:
     from .board_reader import BoardReader
 
-__all__ = ["read_hash", "perspective_ratio", "affine_lattice", "MAX_PERSPECTIVE"]
+__all__ = ["SearchCopy", "read_hash", "perspective_ratio", "affine_lattice", "MAX_PERSPECTIVE"]
 
 #: the most a '#' lattice's far field corner may lie deeper than its near one (:func:`perspective_ratio`);
 #: beyond it the lines' convergence is the hand's and the cells are read on the crossings' affine
@@ -39,9 +42,24 @@ def _darkest_near(d: np.ndarray, px: np.ndarray) -> np.ndarray:
     return d[ys, xs].max(axis=(1, 2))
 
 
+@dataclass
+class SearchCopy:
+    """The copy of a photo the '#' is sought on (:func:`~kinegym.vision.hand_grid.search_copy`):
+    its ``rgb``, ink map ``d`` and ink colour, and (when first asked) its page apart from the
+    rest of the photo (:func:`~kinegym.vision.page.page_apart`)."""
+
+    rgb: np.ndarray
+    d: np.ndarray
+    colour: np.ndarray
+
+    @cached_property
+    def page(self) -> np.ndarray | None:
+        return page_apart(self.rgb)
+
+
 def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object],
-               hashed: tuple[np.ndarray, np.ndarray, np.ndarray], share: float,
-               made: Sequence[Hypothesis] = ()) -> Hypothesis | None:
+              hashed: SearchCopy, share: float, made: Sequence[Hypothesis] = (), on_page: bool = False
+              ) -> Hypothesis | None:
     """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found, at
     ink ``share``, in ``hashed`` - a copy of the photo
     :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its longer side (the same scale
@@ -49,9 +67,15 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
     colour - its lines erased from the ink ``d``, the cells read with the outer cells
     reaching past the field. None, before any cell is read, when the grid is one of the '#'s
     ``made``; a straight field on the same lattice is read again the '#' way (its cells with the
-    photo's own ink level and the larger outer cells), and the arbiter weighs both readings."""
+    photo's own ink level and the larger outer cells), and the arbiter weighs both readings.
+    ``on_page``: the '#' sought in the ink on the page alone; None when the page is not apart
+    from the rest of the photo (nothing new to seek)."""
     h, w = d.shape
-    _, dg, colour = hashed
+    dg, colour = hashed.d, hashed.colour
+    if on_page:
+        if hashed.page is None:
+            return None
+        dg = np.where(hashed.page > 0, dg, np.float32(0.0))
     sizes = (reader.size,) if reader.size is not None else (3, 5)
     grid = find_hash_grid(dg, sizes, colour, share=share)
     fx, fy = w / dg.shape[1], h / dg.shape[0]
