@@ -171,7 +171,7 @@ class BoardReader:
 
     def _hypotheses(self, image: object, reasons: list[str], info: dict[str, object] | None = None
                     ) -> Iterator[Hypothesis]:
-        """The hypotheses, lazily, in :data:`KINDS` order; a kind that finds nothing adds its reason
+        """The hypotheses, lazily, in :data:`KINDS` then ``PAGE_KINDS`` order; a kind that finds nothing adds its reason
         to ``reasons``, one that finds a grid already made is passed over; ``info`` gets ``"noise"``."""
         rgb = photo = _as_rgb(image)
         h0, w0 = rgb.shape[:2]

@@ -38,7 +38,7 @@ __all__ = ["KINDS", "PAGE_KINDS", "BASE_FEATURES", "FEATURES", "SHIPPED_ARBITER"
 KINDS: tuple[str, ...] = ("straight", "hash 22%", "hash 45%", "hash 0%")
 #: The '#' sought once more at each share in the ink on the page alone (:mod:`~kinegym.vision.page`),
 #: made after :data:`KINDS` when none was sure and the page lies amid something else; the arbiter
-#: weighs each as the kind of its share (stop 58: +12 -3 boards on 1,000 real-like photos).
+#: weighs each as the kind of its share (stop 58: +11 -4 boards, refusals 6 -> 1, on 1,000 real-like photos).
 PAGE_KINDS: tuple[str, ...] = ("hash 22% page", "hash 45% page", "hash 0% page")
 #: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`).
 SHARES = {"hash 22%": 0.22, "hash 45%": 0.45, "hash 0%": 0.0, "hash 22% page": 0.22, "hash 45% page": 0.45,
