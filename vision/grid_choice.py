@@ -39,10 +39,10 @@ KINDS: tuple[str, ...] = ("straight", "hash 22%", "hash 45%", "hash 0%")
 #: The '#' sought once more at each share in the ink on the page alone (:mod:`~kinegym.vision.page`),
 #: made after :data:`KINDS` when none was sure and the page lies amid something else; the arbiter
 #: weighs each as the kind of its share (stop 58: +11 -4 boards, refusals 6 -> 1, on 1,000 real-like photos).
-PAGE_KINDS: tuple[str, ...] = ("hash 22% page", "hash 45% page", "hash 0% page")
-#: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`).
-SHARES = {"hash 22%": 0.22, "hash 45%": 0.45, "hash 0%": 0.0, "hash 22% page": 0.22, "hash 45% page": 0.45,
-          "hash 0% page": 0.0}
+PAGE_KINDS: tuple[str, ...] = tuple(f"{k} page" for k in KINDS if k != "straight")
+_HASH_SHARES = {"hash 22%": 0.22, "hash 45%": 0.45, "hash 0%": 0.0}
+#: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`); a page kind's is its share's.
+SHARES = {**_HASH_SHARES, **{f"{k} page": v for k, v in _HASH_SHARES.items()}}
 #: What a hypothesis's reading looks like (:func:`features`, before the kind's own copies).
 BASE_FEATURES: tuple[str, ...] = (
     *(f"kind={k}" for k in KINDS),
