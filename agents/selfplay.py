@@ -94,6 +94,7 @@ def selfplay(timesteps: int = 6_000, seed: int = 0, swap_every: int = 1_000, eva
     """Train by self-play; see the module docstring. ``progress(n)`` hears of every ``n`` steps."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     if not (isinstance(timesteps, int) and 1 <= timesteps <= 10_000_000):
@@ -111,6 +112,8 @@ def selfplay(timesteps: int = 6_000, seed: int = 0, swap_every: int = 1_000, eva
 
     model = AtomicMaskablePPO("MlpPolicy", vec, n_steps=128, batch_size=64, learning_rate=1e-3, ent_coef=0.01,
                         policy_kwargs={"net_arch": [64, 64]}, seed=seed, device="cpu", verbose=0)
+    # a logger of no outputs: SB3's default one makes an empty SB3-<time> folder in the temporary folder per run
+    model.set_logger(Logger(folder=None, output_formats=[]))
     holder.append(FrozenOpponent(model, seed))
     games = max(1, eval_games)
     before = {**score(model, "random", games, seed), **score(model, "thesis", games, seed)}

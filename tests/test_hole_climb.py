@@ -137,7 +137,10 @@ def test_maskable_ppo_trains_a_few_hundred_steps() -> None:
     from sb3_contrib import MaskablePPO
 
     env = gym.make(ENV_ID)
+    from stable_baselines3.common.logger import Logger
+
     model = MaskablePPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, verbose=0, device="cpu")
+    model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default leaves an empty folder in /tmp
     model.learn(total_timesteps=256)
     obs, _ = env.reset(seed=1)
     action, _ = model.predict(obs, action_masks=env.unwrapped.action_masks(), deterministic=True)

@@ -104,10 +104,16 @@ def test_the_single_agent_env_is_the_arms_side_of_the_aec() -> None:
     assert np.array_equal(obs, single.aec.observe("arm")["observation"])
 
 
-def test_selfplay_trains_against_its_frozen_self(tmp_path) -> None:  # noqa: ANN001
+def test_selfplay_trains_against_its_frozen_self(tmp_path, monkeypatch) -> None:  # noqa: ANN001
+    import tempfile
+
     from kinegym.agents.selfplay import FrozenOpponent, selfplay
 
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))  # SB3's own logger makes an empty SB3-<time> folder there
     res = selfplay(timesteps=256, swap_every=128, eval_games=1, out=tmp_path)
+    assert not list(tmp.glob("SB3-*"))  # no empty logger folder left in the user's temporary folder
     assert res.model_path is not None and res.model_path.is_file()
     assert set(res.before) == set(res.after) == {"random as X", "random as O", "thesis as X", "thesis as O"}
     assert all(abs(sum(v) - 1.0) < 1e-9 for v in res.after.values())
