@@ -135,10 +135,9 @@ def test_runs_under_subprocess_vec_env() -> None:
 
 def test_maskable_ppo_trains_a_few_hundred_steps() -> None:
     from sb3_contrib import MaskablePPO
-
-    env = gym.make(ENV_ID)
     from stable_baselines3.common.logger import Logger
 
+    env = gym.make(ENV_ID)
     model = MaskablePPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, verbose=0, device="cpu")
     model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default leaves an empty folder in /tmp
     model.learn(total_timesteps=256)
