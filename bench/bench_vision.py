@@ -4,6 +4,7 @@ Run::
 
     taskset -c 0 python bench/bench_vision.py [--images 500] [--quick]
     taskset -c 0 python bench/bench_vision.py --real-like-only --images 300 --real-like-from 40000
+    python bench/bench_vision.py --real-like-only --images 300 --real-like-from 40000 --why
 
 Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
 
@@ -23,7 +24,10 @@ surface and per photo size, read as the game reads them (``BoardReader(size=3)``
 shipped cell classifier), and beside it what the hand rule alone would have called.
 
 Per set: cells right, whole boards right, X-vs-O right among cells both call marked,
-boards refused (NoBoardError), and the reader's time per frame (median, p95). The seed's
+boards refused (NoBoardError), and the reader's time per frame (median, p95); with ``--why``, why
+each real-like board read wrong was wrong: no grid made was the drawn '#', the '#' was made and
+another grid chosen, or the '#' was chosen and which cells were read wrong (centre, edge or
+corner; a mark missed, one invented, X and O swapped). The seed's
 :class:`ThresholdReader` is calibrated once for the camera's nominal pose (straight down
 over the field, as the thesis fixed its camera) and, as in the thesis, told which cells
 are the arm's (the X cells) so that it can name the rest O. In the lab set it is calibrated
@@ -70,13 +74,16 @@ def main() -> None:
                     help="the real-like set's first seed (default 20,000, the seeds the reader was tuned on; "
                          "40,000 on were never looked at before stop 58)")
     ap.add_argument("--real-like-only", action="store_true", help="only the real-like set")
+    ap.add_argument("--why", action="store_true",
+                    help="with the real-like set: why each board read wrong was wrong (the grid not found, "
+                         "another grid chosen, or its cells), against the scene's own crossings")
     args = ap.parse_args()
     if args.real_only:
         real_photos(max(1, args.repeat))
         return
     count = 60 if args.quick else args.images
     if args.real_like_only:
-        real_like(count, args.real_like_from)
+        real_like(count, args.real_like_from, args.why)
         return
     print(f"{count} images per set, 640 x 480")
     print("| set | reader | cells right | boards right | X vs O right | refused | ms per frame median / p95 |")
@@ -114,29 +121,34 @@ def main() -> None:
             print(f"| {name} | {label} | {r[0] / (count * n * n):.2%} | {r[1] / count:.1%} | "
                   f"{r[3] / max(r[2], 1):.2%} | {r[4]} | {ms} |", flush=True)
     real_photos()
-    real_like(count, args.real_like_from)
+    real_like(count, args.real_like_from, args.why)
 
 
-def real_like(count: int, first: int = 20_000) -> None:
+def real_like(count: int, first: int = 20_000, why: bool = False) -> None:
     """The real-like set, seeds ``first`` on: per surface and in all, cells and boards right, X
-    vs O, refusals, and the reader's time by photo width."""
+    vs O, refusals, and the reader's time by photo width; with ``why``, then why the boards
+    read wrong were wrong (:func:`why_wrong`, :func:`print_why`)."""
     from kinegym.envs.sim.scenes_real import real_like_scene
     from kinegym.vision.cell_model import rule_probs
 
     reader = BoardReader(size=3)
     rows: dict[str, list] = {}
+    wrong: list[tuple[str, list[tuple[str, str]]]] = []
     for i in range(count):
         sc = real_like_scene(first + i)
         trace: dict[str, object] = {}
         t0 = time.perf_counter()
         try:
-            got = reader.read(sc.image, trace).cells
+            reading = reader.read(sc.image, trace)
+            got = reading.cells
             # the hand rule alone, for comparison: its probabilities are among the model's inputs
             rule = rule_probs(np.asarray(trace["cell_inputs"])).argmax(axis=1).reshape(3, 3)
         except NoBoardError:
             got = rule = None
         dt = (time.perf_counter() - t0) * 1e3
         made = len(trace.get("hypotheses", []))  # type: ignore[arg-type]
+        if why and (got is None or not np.array_equal(got, sc.cells)):
+            wrong.append(why_wrong(reader, sc, None if got is None else reading))
         w = int(sc.notes["width"])
         for key in (f"{sc.notes['surface']}", "all", "width <= 960" if w <= 960 else "width 1,280-2,048"
                     if w <= 2048 else "width 3,000-4,000"):
@@ -164,6 +176,67 @@ def real_like(count: int, first: int = 20_000) -> None:
               f"{xo / max(both, 1):.1%} | {refused} | {np.median(t):.1f} / {np.percentile(t, 95):.1f} | "
               f"{rule_cells / (9 * len(res)):.1%} / {rule_boards / len(res):.1%} | "
               f"{np.mean([r[4] for r in res]):.2f} |", flush=True)
+    if why:
+        print_why(wrong, count)
+
+
+#: How near (in cells) a grid's inner crossings must lie to the scene's own to be its '#'.
+RIGHT_GRID_CELLS = 0.3
+
+
+def _inner_crossings(H: np.ndarray) -> np.ndarray:
+    """A 3 x 3 grid's four inner crossings in px, under ``H`` (cells to px)."""
+    g = np.array([[1.0, 1.0, 1.0], [2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [2.0, 2.0, 1.0]]) @ H.T
+    return g[:, :2] / g[:, 2:]
+
+
+def why_wrong(reader: BoardReader, sc: object, reading: object | None) -> tuple[str, list[tuple[str, str]]]:
+    """Why real-like scene ``sc`` read wrong: ``("refused" | "no grid made is the drawn '#'" | "the '#' made,
+    another grid chosen" | "the '#' chosen, cells read wrong", cell errors)``; a cell error is
+    ``(kind, where)``: kind "mark read empty", "empty read as a mark" or "X and O swapped", where
+    "centre", "edge" or "corner". A grid is the drawn '#' when its inner crossings lie within
+    :data:`RIGHT_GRID_CELLS` cells of the scene's (each the mean of the four cell centres around it)."""
+    c = np.asarray(sc.centres_px, np.float64)  # type: ignore[attr-defined]
+    truth_x = np.array([(c[i, j] + c[i + 1, j] + c[i, j + 1] + c[i + 1, j + 1]) / 4 for i in (0, 1) for j in (0, 1)])
+    cell = float(np.median(np.hypot(*np.diff(c, axis=1).reshape(-1, 2).T)))
+
+    def is_drawn(H: np.ndarray) -> bool:
+        got = _inner_crossings(H)
+        return float(np.hypot(*(got[:, None] - truth_x[None]).transpose(2, 0, 1)).min(axis=1).max()) < (
+            RIGHT_GRID_CELLS * cell)
+
+    if reading is None:
+        return "refused", []
+    if not is_drawn(reading.homography):  # type: ignore[attr-defined]
+        made = any(h.n == 3 and is_drawn(np.diag([1 / h.scale, 1 / h.scale, 1.0]) @ h.found)
+                   for h in reader.hypotheses(sc.image))  # type: ignore[attr-defined]
+        return ("the '#' made, another grid chosen" if made else "no grid made is the drawn '#'"), []
+    errors = []
+    truth = sc.cells  # type: ignore[attr-defined]
+    for r, col in np.argwhere(reading.cells != truth):  # type: ignore[attr-defined]
+        t, g = int(truth[r, col]), int(reading.cells[r, col])  # type: ignore[attr-defined]
+        kind = "mark read empty" if g == 0 else "empty read as a mark" if t == 0 else "X and O swapped"
+        where = "centre" if (r, col) == (1, 1) else "corner" if r != 1 and col != 1 else "edge"
+        errors.append((kind, where))
+    return "the '#' chosen, cells read wrong", errors
+
+
+def print_why(wrong: list[tuple[str, list[tuple[str, str]]]], count: int) -> None:
+    """The table of :func:`why_wrong`'s answers for the boards read wrong of ``count``."""
+    print(f"\nWhy {len(wrong)} of {count} real-like boards read wrong")
+    print("| why | boards | share of the wrong |")
+    print("|---|---|---|")
+    for why in ("refused", "no grid made is the drawn '#'", "the '#' made, another grid chosen",
+                "the '#' chosen, cells read wrong"):
+        k = sum(w == why for w, _ in wrong)
+        print(f"| {why} | {k} | {k / max(len(wrong), 1):.0%} |")
+    errors = [e for _, errs in wrong for e in errs]
+    if errors:
+        print("\n| cells read wrong under the right '#' | centre | edge | corner |")
+        print("|---|---|---|---|")
+        for kind in ("mark read empty", "empty read as a mark", "X and O swapped"):
+            counts = " | ".join(str(errors.count((kind, w))) for w in ("centre", "edge", "corner"))
+            print(f"| {kind} | {counts} |")
 
 
 def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:

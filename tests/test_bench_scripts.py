@@ -4,6 +4,8 @@
   are timed where the env calls them; a renamed method would leave a part at zero or break the
   sums, and the parts, each a difference of nested timers, are never negative and add up to no
   more than the steps' own time.
+* ``bench/bench_vision.py --why``: why each board read wrong was wrong, against the scene's own
+  crossings (the grid not found, another grid chosen, or which cells).
 * ``bench/bench_vision.py --real-like-from``: the real-like set drawn from other seeds (the
   reader was tuned on 20,000 on; 40,000 on is a held-out draw) reads the seeds asked for.
 """
@@ -67,3 +69,39 @@ def test_the_real_like_set_starts_at_the_seed_asked_for(bench_vision, capsys, mo
     assert drawn == [40_000, 40_001]
     assert "2 real-like photos (3 x 3, seeds 40,000 on)" in out
     assert "| all | 2 |" in out
+
+
+def test_why_a_board_read_wrong_was_wrong(bench_vision, capsys) -> None:
+    """``--why``: a reading under the scene's own '#' with three cells changed names each error;
+    the same reading one cell over is another grid, made or not; no reading is a refusal."""
+    import dataclasses
+
+    import numpy as np
+
+    from kinegym.envs.sim.scenes_real import real_like_scene
+    from kinegym.vision.board_reader import BoardReader
+
+    reader = BoardReader(size=3)
+    sc = real_like_scene(20_000)
+    reading = reader.read(sc.image)
+    assert sc.text() == reading.text() == "X..|.X.|OOX"
+    assert bench_vision.why_wrong(reader, sc, reading) == ("the '#' chosen, cells read wrong", [])
+    cells = reading.cells.copy()
+    cells[0, 0], cells[0, 1], cells[2, 0] = 0, 2, 1  # X missed, an O invented, an O read as X
+    assert bench_vision.why_wrong(reader, sc, dataclasses.replace(reading, cells=cells)) == (
+        "the '#' chosen, cells read wrong",
+        [("mark read empty", "corner"), ("empty read as a mark", "edge"), ("X and O swapped", "corner")])
+    one_over = np.array([[1, 0, 1.0], [0, 1, 0], [0, 0, 1]])  # the lattice one cell to the right
+    shifted = dataclasses.replace(reading, homography=reading.homography @ one_over)
+    assert bench_vision.why_wrong(reader, sc, shifted) == ("the '#' made, another grid chosen", [])
+
+    class NoHypotheses:
+        def hypotheses(self, image: object) -> list:
+            return []
+
+    assert bench_vision.why_wrong(NoHypotheses(), sc, shifted) == ("no grid made is the drawn '#'", [])
+    assert bench_vision.why_wrong(reader, sc, None) == ("refused", [])
+    bench_vision.print_why([("refused", []), ("the '#' chosen, cells read wrong", [("mark read empty", "edge")])], 10)
+    out = capsys.readouterr().out
+    assert "Why 2 of 10 real-like boards read wrong" in out
+    assert "| refused | 1 | 50% |" in out and "| mark read empty | 0 | 1 | 0 |" in out
