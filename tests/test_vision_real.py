@@ -16,10 +16,11 @@ from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision import board_reader, ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.grid_choice import same_lattice
-from kinegym.vision.hand_grid import HashGrid
+from kinegym.vision.hand_grid import FLICK_CELLS, HashGrid, Track, erase_mask
 from kinegym.vision.hash_cells import MAX_PERSPECTIVE, affine_lattice, perspective_ratio
 from kinegym.vision.image_io import read_image
 from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
+from kinegym.vision.polylines import resample
 
 DATA = Path(__file__).parent / "data" / "real"
 LABELS = json.loads((DATA / "labels.json").read_text())["boards"]
@@ -186,6 +187,26 @@ def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
     made = BoardReader(size=3).hypotheses(sc.image)
     assert same_lattice(made[0].found, made[1].found, 3) and made[1].p > made[0].p
 
+
+def test_a_flick_at_a_line_s_tip_goes_with_the_line_and_a_larger_piece_stays() -> None:
+    """The '#' lines' erase mask takes a short elongated stroke hanging at a line's tip with the
+    line; a longer one at a tip (marks joined up by graph paper's rules took whole marks with it,
+    stop 60) and a round mark touching a tip stay."""
+    d = np.zeros((200, 200), np.float32)
+    cols = [Track(np.array([[x, 40.0], [x, 160.0]]), 1.0, 10) for x in (75.0, 125.0)]
+    rows = [Track(np.array([[40.0, y], [160.0, y]]), 1.0, 10) for y in (75.0, 125.0)]
+    for tr in cols + rows:  # the '#': cells 50 px
+        tr.dense = resample(tr.pts, 2.0)
+        cv2.line(d, tuple(int(v) for v in tr.pts[0]), tuple(int(v) for v in tr.pts[1]), 1.0, 2)
+    cv2.line(d, (75, 40), (60, 22), 1.0, 2)  # a flick at the left line's top: 0.3 cell across
+    cv2.line(d, (125, 40), (185, 5), 1.0, 2)  # a longer stroke at the right line's top: 1.2 cells
+    cv2.circle(d, (75, 173), 12, 1.0, 2)  # an O touching the left line's foot
+    crossings = np.array([[[75.0, 75.0], [75.0, 125.0]], [[125.0, 75.0], [125.0, 125.0]]])
+    out = erase_mask(HashGrid(3, np.eye(3), cols, rows, crossings, 2.0, 0.3, 1.0, 0.0), d)
+    assert out[100, 75] and out[75, 100]  # the lines
+    assert out[24, 61] and out[30, 67]  # the flick
+    assert 60 / 50 > FLICK_CELLS and not out[8, 180] and not out[20, 159]  # the longer stroke
+    assert not out[185, 75] and not out[173, 87]  # the O
 
 def test_the_affine_lattice_of_crossings_and_the_perspective_ratio() -> None:
     """An affine lattice has ratio 1 and is its crossings' own fit; a camera's tilt gives a ratio
