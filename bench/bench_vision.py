@@ -201,9 +201,8 @@ def why_wrong(reader: BoardReader, sc: object, reading: object | None) -> tuple[
     cell = float(np.median(np.hypot(*np.diff(c, axis=1).reshape(-1, 2).T)))
 
     def is_drawn(H: np.ndarray) -> bool:
-        got = _inner_crossings(H)
-        return float(np.hypot(*(got[:, None] - truth_x[None]).transpose(2, 0, 1)).min(axis=1).max()) < (
-            RIGHT_GRID_CELLS * cell)
+        worst = np.linalg.norm(_inner_crossings(H)[:, None] - truth_x[None], axis=-1).min(axis=1).max()
+        return float(worst) < RIGHT_GRID_CELLS * cell
 
     if reading is None:
         return "refused", []

@@ -208,6 +208,7 @@ def test_a_flick_at_a_line_s_tip_goes_with_the_line_and_a_larger_piece_stays() -
     assert 60 / 50 > FLICK_CELLS and not out[8, 180] and not out[20, 159]  # the longer stroke
     assert not out[185, 75] and not out[173, 87]  # the O
 
+
 def test_the_affine_lattice_of_crossings_and_the_perspective_ratio() -> None:
     """An affine lattice has ratio 1 and is its crossings' own fit; a camera's tilt gives a ratio
     above 1; a lattice whose horizon crosses the field has none."""
