@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from kinegym.agents.train_cells import (
+    CellData,
     collect,
     expected_calibration_error,
     fit,
@@ -18,6 +19,7 @@ from kinegym.agents.train_cells import (
     grid_is_right,
     load_or_collect,
     main,
+    recalibrate,
 )
 from kinegym.configs.io import FileError
 from kinegym.envs.sim.scenes_real import real_like_scene
@@ -221,6 +223,37 @@ def test_the_training_entry_point_writes_a_model_the_reader_uses(tmp_path: Path,
     with pytest.raises(SystemExit):
         main(["--convs", "4,4"])
     assert "--convs 4,4; expected three channel counts" in capsys.readouterr().err
+
+
+def test_recalibrating_keeps_the_network_and_fits_the_temperature_at_the_new_prior(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rng = np.random.default_rng(5)
+    x, y = _inputs(rng, 40)
+    xt, yt = _inputs(rng, 20)
+    model = fit(x, y, hidden=8, epochs=2, convs=(4, 4, 8), progress=False)
+    model.rule_weight, model.temperature, model.info = 0.3, 1.0, '{"epochs": 2}'
+    logits = model.logits(xt)
+    record = recalibrate(model, CellData(xt, yt, np.arange(len(yt)) // 9, 20, 20), 0.15)
+    np.testing.assert_array_equal(model.logits(xt), logits)  # the network is untouched
+    assert model.rule_weight == 0.15 and record["rule_weight_before"] == 0.3
+    t = model.temperature
+    assert fit_temperature(model, xt, yt) == t and record["temperature"] == round(t, 4)
+    info = model.describe()
+    assert info["epochs"] == 2 and info["rule_weight"] == 0.15 and info["recalibrated"]["cells"] == len(yt)
+    with pytest.raises(ValueError, match="rule weight -1; expected 0..10"):
+        recalibrate(model, CellData(xt, yt, np.zeros(len(yt), np.int64), 1, 1), -1)
+    with pytest.raises(ValueError, match="9 cells from 1 photos; expected at least 50"):
+        recalibrate(model, CellData(xt[:9], yt[:9], np.zeros(9, np.int64), 1, 1), 0.1)
+    # through the entry point, on photos from the recalibration seeds: a copy written, the source kept
+    src, out = tmp_path / "m.npz", tmp_path / "recal.npz"
+    src.write_bytes(model.to_bytes())
+    assert main(["--recalibrate", str(src), "--rule-weight", "0.05", "--real-like", "8", "--hard", "1",
+                 "--workers", "1", "--out", str(out)]) == 0
+    assert "wrote" in capsys.readouterr().out
+    again = CellModel.load(out)
+    assert again.rule_weight == 0.05 and CellModel.load(src).rule_weight == 0.15
+    np.testing.assert_array_equal(again.k1, model.k1)
+    assert again.describe()["recalibrated"]["seeds"] == [5_000_000, 6_000_000]
 
 
 def test_the_shipped_model_beats_the_rule_on_unseen_real_like_photos() -> None:
