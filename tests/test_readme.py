@@ -21,7 +21,7 @@ NOT_RUN = {
     "python -m kinegym.zoo": "RL Zoo trains and plays in tests/test_zoo.py, with fewer steps",
     "python -m kinegym.agents.train_cells": "23 min; tests/test_cell_model.py trains through the same entry point "
                                             "on 14 photos",
-    "python -m kinegym.agents.train_grid_arbiter": "11 min; tests/test_grid_choice.py trains through the same entry "
+    "python -m kinegym.agents.train_grid_arbiter": "25 min; tests/test_grid_choice.py trains through the same entry "
                                                    "point on 13 photos",
     "kinegym sensor-study --wall seed_4x4 --sigmas 0.1,0.25,0.5,1 --trials 2000": "minutes; test_cli runs a small one",
     "kinegym read-board photo.jpg": "the user's own photo; test_cli reads a rendered one",
