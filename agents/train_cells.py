@@ -63,8 +63,9 @@ __all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "ex
            "recalibrate", "main"]
 
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
-#: the weight of the hand rule's log-probabilities at reading, a prior (stop 61: 0.3 -> 0.15 read 25 more of
-#: 1,000 real-like photos; 0.1 read 27 more but 3 fewer real photo readings; bench/README.md)
+#: the weight of the hand rule's log-probabilities at reading, a prior (stop 61: at 0.15, recalibrated and the
+#: arbiter retrained, 28 more of 1,000 real-like boards than at 0.3; at 0.1 as it was, 27 more but 3 of the real
+#: photos' condition readings fewer; bench/README.md, "The rule's weight halved")
 RULE_WEIGHT = 0.15
 #: the first seeds of the photos a trained model is recalibrated on (:func:`recalibrate`)
 RECAL_REAL_LIKE_SEED, RECAL_HARD_SEED = 5_000_000, 6_000_000
@@ -284,12 +285,13 @@ def fit_temperature(model: CellModel, x: np.ndarray, y: np.ndarray) -> float:
     return best
 
 
-def recalibrate(model: CellModel, data: CellData, rule_weight: float) -> dict[str, object]:
+def recalibrate(model: CellModel, data: CellData, rule_weight: float, seeds: tuple[int, int] | None = None
+                ) -> dict[str, object]:
     """Give ``model`` the hand rule's prior at ``rule_weight`` and fit its temperature anew on
-    ``data`` (cells of photos it was not trained on). The network stays: it was fit without the
-    prior, which only joins its logits at reading. Returns the record, also stored in the
-    model's ``info`` under ``"recalibrated"`` (``"rule_weight"`` and ``"temperature"`` there
-    become the new ones)."""
+    ``data`` (cells of photos it was not trained on; ``seeds``, recorded when given: their first
+    real-like and hard seeds). The network stays: it was fit without the prior, which only joins
+    its logits at reading. Returns the record, also stored in the model's ``info`` under
+    ``"recalibrated"`` (``"rule_weight"`` and ``"temperature"`` there become the new ones)."""
     if len(data.y) < 50:
         raise ValueError(f"{len(data.y)} cells from {data.photos} photos; expected at least 50 (render more photos)")
     if not 0 <= rule_weight <= 10:
@@ -301,7 +303,7 @@ def recalibrate(model: CellModel, data: CellData, rule_weight: float) -> dict[st
     after = model.probs(data.x)
     record: dict[str, object] = {
         "photos": data.photos, "photos_with_right_grid": data.kept, "cells": int(len(data.y)),
-        "seeds": [RECAL_REAL_LIKE_SEED, RECAL_HARD_SEED],
+        **({} if seeds is None else {"seeds": list(seeds)}),
         "rule_weight_before": old[0], "temperature_before": round(old[1], 4),
         "rule_weight": model.rule_weight, "temperature": round(model.temperature, 4),
         "accuracy_before": round(float((before.argmax(1) == data.y).mean()), 5),
@@ -390,10 +392,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         ap.error(f"--convs {args.convs}; expected three channel counts in 1..256, like {','.join(map(str, CONVS))}")
     if args.recalibrate is not None:
         model = CellModel.load(args.recalibrate)
-        data = collect(args.real_like, args.hard, max(1, args.workers), True, args.all_grids,
-                       (RECAL_REAL_LIKE_SEED, RECAL_HARD_SEED))
+        seeds = (RECAL_REAL_LIKE_SEED, RECAL_HARD_SEED)
+        data = collect(args.real_like, args.hard, max(1, args.workers), True, args.all_grids, seeds)
         try:
-            report = recalibrate(model, data, args.rule_weight)
+            report = recalibrate(model, data, args.rule_weight, seeds)
         except ValueError as err:
             ap.error(str(err))
         path = write_atomic(args.out or args.recalibrate, model.to_bytes(), suffixes=(".npz",), what="cell model")

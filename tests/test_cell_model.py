@@ -240,6 +240,7 @@ def test_recalibrating_keeps_the_network_and_fits_the_temperature_at_the_new_pri
     assert fit_temperature(model, xt, yt) == t and record["temperature"] == round(t, 4)
     info = model.describe()
     assert info["epochs"] == 2 and info["rule_weight"] == 0.15 and info["recalibrated"]["cells"] == len(yt)
+    assert "seeds" not in record  # not said where the cells came from
     with pytest.raises(ValueError, match="rule weight -1; expected 0..10"):
         recalibrate(model, CellData(xt, yt, np.zeros(len(yt), np.int64), 1, 1), -1)
     with pytest.raises(ValueError, match="9 cells from 1 photos; expected at least 50"):
