@@ -14,7 +14,7 @@ from kinegym.agents.train_grid_arbiter import _scene_hypotheses, choose, fit, ma
 from kinegym.configs.io import FileError
 from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision.board_reader import BoardReader, NoBoardError, VisionError
-from kinegym.vision.grid_choice import FEATURES, KINDS, PAGE_KINDS, GridArbiter, features, same_grid
+from kinegym.vision.grid_choice import FEATURES, HUE_KINDS, KINDS, PAGE_KINDS, GridArbiter, features, same_grid
 
 
 def _toy(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -78,7 +78,7 @@ def test_hypotheses_are_made_once_per_grid_and_traced() -> None:
     probable of them."""
     sc = real_like_scene(20_001)
     hyps = BoardReader(size=3, arbiter=None).hypotheses(sc.image)
-    order = KINDS + PAGE_KINDS
+    order = KINDS + PAGE_KINDS + HUE_KINDS
     assert len(hyps) >= 2 and [h.kind for h in hyps] == [k for k in order if k in {h.kind for h in hyps}]
     assert not any(same_grid(a, b) for i, a in enumerate(hyps) for b in hyps[i + 1:])
     assert all(features(h).shape == (len(FEATURES),) and np.isfinite(features(h)).all() for h in hyps)

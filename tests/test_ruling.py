@@ -3,13 +3,17 @@ whose answer is known, and on real-like photos that the reader misread before.""
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
 from kinegym.agents.train_cells import grid_is_right
 from kinegym.envs.sim.scenes_real import real_like_scene
+from kinegym.vision import board_reader
 from kinegym.vision.board_reader import BoardReader
-from kinegym.vision.hand_grid import Track
+from kinegym.vision.errors import NoBoardError
+from kinegym.vision.grid_choice import HUE_KINDS
+from kinegym.vision.hand_grid import Track, find_hash_grid
 from kinegym.vision.ruling import Ruling, clear_rules, is_ruled, rules_mask
 
 BLUE = np.array([0.75, 0.45, 0.1], np.float32)  # RGB darkness of blue ink: mostly red and green
@@ -100,3 +104,52 @@ def test_real_like_graph_paper_misread_before(seed: int) -> None:
     reading = BoardReader(size=3).read(sc.image)
     assert grid_is_right(reading.homography, sc.centres_px.reshape(-1, 2), 3)
     assert (reading.cells == sc.cells).all()
+
+
+def _red_hash(d: np.ndarray, colour: np.ndarray, xs: tuple[int, int], ys: tuple[int, int], v: float) -> None:
+    """Draw a red '#' of darkness ``v`` (3 px lines at columns ``xs``, rows ``ys``, arms of 88 px) in place."""
+    red = RED / np.linalg.norm(RED)
+    m = np.zeros(d.shape, np.uint8)
+    for x in xs:
+        cv2.line(m, (x, 110), (x, 380), 1, 3)
+    for y in ys:
+        cv2.line(m, (110, y), (380, y), 1, 3)
+    d[m > 0] = v
+    colour[m > 0] = v * red
+
+
+def test_a_pale_hash_of_another_colour_on_graph_paper_is_found_in_its_colour_alone() -> None:
+    """A red '#' between blue rules, paler than the heavier rules and less than 1.6x the rules'
+    darkness: the search in the ink darker than the rules misses it and the rules win; the search
+    asked for ``other_colour`` leaves the rules' colour out and finds it. On paper without rules
+    that search has nothing to leave out and finds nothing."""
+    d, colour = graph_paper(size=480, step=12, heavy=48)
+    _red_hash(d, colour, (198, 294), (210, 294), 0.4)
+    truth = np.array([[198, 210], [198, 294], [294, 210], [294, 294]], np.float64)  # [col, row] order
+    rules_won = find_hash_grid(d, (3,), colour, share=0.22)
+    assert np.abs(rules_won.crossings.reshape(-1, 2) - truth).max() > 20  # the rules' '#', not the drawn one
+    grid = find_hash_grid(d, (3,), colour, share=0.22, other_colour=True)
+    assert grid.n == 3 and np.abs(grid.crossings.reshape(-1, 2) - truth).max() <= 3
+    assert grid.rules is not None and grid.rule_hue is not None
+    assert float(grid.rule_hue @ (BLUE / np.linalg.norm(BLUE))) > 0.99  # the rules' colour, to clear from the cells
+    blank, hue = np.zeros_like(d), np.zeros_like(colour)
+    _red_hash(blank, hue, (198, 294), (210, 294), 0.4)
+    assert np.abs(find_hash_grid(blank, (3,), hue, share=0.22).crossings.reshape(-1, 2) - truth).max() <= 3
+    with pytest.raises(NoBoardError, match="no ruled paper whose rules have a colour of their own"):
+        find_hash_grid(blank, (3,), hue, share=0.22, other_colour=True)
+
+
+def test_a_teal_hash_on_blue_graph_paper_is_read_by_the_hue_kind(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Real-like photo 40,133: a teal '#' on blue graph paper, no darker than its heavier rules.
+    Every kind before the hue kinds takes rules for its lines; "hash 22% hue", made because those
+    saw ruled paper and none was sure, reads the board right, cell for cell. Without the hue kinds
+    the board is misread."""
+    sc = real_like_scene(40_133)
+    trace: dict[str, object] = {}
+    reading = BoardReader(size=3).read(sc.image, trace)
+    made = dict(trace["hypotheses"])  # type: ignore[arg-type]
+    assert max(made, key=made.get) in HUE_KINDS  # type: ignore[arg-type]
+    assert grid_is_right(reading.homography, sc.centres_px.reshape(-1, 2), 3)
+    assert (reading.cells == sc.cells).all()
+    monkeypatch.setattr(board_reader, "HUE_KINDS", ())
+    assert not (BoardReader(size=3).read(sc.image).cells == sc.cells).all()

@@ -70,7 +70,7 @@ from .cells import _probabilities, _remove_grid_lines, board_features
 from .counts import count_rule, most_probable_board
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
-from .grid_choice import KINDS, PAGE_KINDS, SHARES, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
+from .grid_choice import HUE_KINDS, KINDS, PAGE_KINDS, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
 from .grid_lines import (
     _crossing,
     _crossings,
@@ -83,9 +83,8 @@ from .grid_lines import (
     _segments,
     _union_length,
 )
-from .hand_grid import search_copy
 from .hash_cells import SearchCopy, _darkest_near, read_hash
-from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_colour, ink_map, noise_sigma
+from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_map, noise_sigma
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
 
@@ -164,15 +163,16 @@ class BoardReader:
                             None if self.arbiter is None else float(best.p or 0.0))
 
     def hypotheses(self, image: object) -> list[Hypothesis]:
-        """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` (then ``PAGE_KINDS``) that finds a grid
-        (the same grid once), its cells read and its arbiter probability ``p`` (1.0 without an
+        """Every grid hypothesis of :data:`~kinegym.vision.grid_choice.KINDS` (then ``PAGE_KINDS``, ``HUE_KINDS``) that
+        finds a grid (the same grid once), its cells read and its arbiter probability ``p`` (1.0 without an
         arbiter): what :meth:`read` chooses from, for training and inspecting the arbiter."""
         return list(self._hypotheses(image, []))
 
     def _hypotheses(self, image: object, reasons: list[str], info: dict[str, object] | None = None
                     ) -> Iterator[Hypothesis]:
-        """The hypotheses, lazily, in :data:`KINDS` then ``PAGE_KINDS`` order; a kind that finds nothing adds its reason
-        to ``reasons``, one that finds a grid already made is passed over; ``info`` gets ``"noise"``."""
+        """The hypotheses, lazily, in :data:`KINDS`, ``PAGE_KINDS``, ``HUE_KINDS`` (on ruled paper) order; a kind that
+        finds nothing adds its reason to ``reasons``, one that finds a grid already made is passed over; ``info`` gets
+        ``"noise"``."""
         rgb = photo = _as_rgb(image)
         h0, w0 = rgb.shape[:2]
         scale = min(1.0, self.max_side_px / max(h0, w0))
@@ -187,17 +187,16 @@ class BoardReader:
         d = ink_map(rgb, stroke_px=max(6.0, diag / 100))
         made: list[Hypothesis] = []
         hashed: SearchCopy | None = None
-        for kind in KINDS + PAGE_KINDS:
+        for kind in KINDS + PAGE_KINDS + HUE_KINDS:
+            if kind in HUE_KINDS and (hashed is None or not hashed.ruled):  # no ruled paper seen
+                continue
             sub: dict[str, object] = {}
             try:
                 if kind == "straight":  # straight ruled lines (the lab's and the renderer's boards, frames)
                     hyp = self._straight(d, diag, sub)
                 else:  # a hand-drawn '#': wavy, converging, unframed lines
-                    if hashed is None:
-                        small = search_copy(rgb, photo)
-                        st = max(6.0, math.hypot(*small.shape[:2]) / 100)
-                        hashed = SearchCopy(small, ink_map(small, stroke_px=st), ink_colour(small, stroke_px=st))
-                    hyp = read_hash(self, rgb, d, sub, hashed, SHARES[kind], made, kind in PAGE_KINDS)
+                    hashed = hashed or SearchCopy.of(rgb, photo)
+                    hyp = read_hash(self, rgb, d, sub, hashed, kind, made)
             except NoBoardError as exc:
                 reasons.append(f"{'straight lines' if kind == 'straight' else kind}: {exc.reason}")
                 continue

@@ -30,8 +30,8 @@ from kinegym.configs.io import read_bytes
 from .errors import VisionError
 from .ink import _apply
 
-__all__ = ["KINDS", "PAGE_KINDS", "BASE_FEATURES", "FEATURES", "SHIPPED_ARBITER", "Hypothesis", "GridArbiter",
-           "features", "with_kinds", "area_ratio", "wiggle", "same_grid", "same_lattice"]
+__all__ = ["KINDS", "PAGE_KINDS", "HUE_KINDS", "BASE_FEATURES", "FEATURES", "SHIPPED_ARBITER", "Hypothesis",
+           "GridArbiter", "features", "with_kinds", "base_kind", "area_ratio", "wiggle", "same_grid", "same_lattice"]
 
 #: The hypotheses, in the order they are made: the straight ruled field, then the '#' in ink
 #: masks at 22 %, 45 % and 0 % (all ink above the noise) of the strongest ink.
@@ -40,9 +40,16 @@ KINDS: tuple[str, ...] = ("straight", "hash 22%", "hash 45%", "hash 0%")
 #: made after :data:`KINDS` when none was sure and the page lies amid something else; the arbiter
 #: weighs each as the kind of its share (stop 58: +11 -4 boards, refusals 6 -> 1, on 1,000 real-like photos).
 PAGE_KINDS: tuple[str, ...] = tuple(f"{k} page" for k in KINDS if k != "straight")
+#: On ruled or graph paper whose rules have a colour of their own, the '#' sought last at 22 % and
+#: 0 % in the ink not of the rules' colour, however pale (a teal '#' on blue rules, no darker
+#: than they are; :func:`~kinegym.vision.hand_grid.find_hash_grid`'s ``other_colour``), when
+#: none was sure; the arbiter weighs each as the kind of its share (stop 62: +3 -1 boards on
+#: 1,000 real-like photos, the real photos' readings as they were).
+HUE_KINDS: tuple[str, ...] = ("hash 22% hue", "hash 0% hue")
 _HASH_SHARES = {"hash 22%": 0.22, "hash 45%": 0.45, "hash 0%": 0.0}
-#: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`); a page kind's is its share's.
-SHARES = {**_HASH_SHARES, **{f"{k} page": v for k, v in _HASH_SHARES.items()}}
+#: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`); a page or hue kind's is its share's.
+SHARES = {**_HASH_SHARES, **{f"{k} page": v for k, v in _HASH_SHARES.items()},
+          **{k: _HASH_SHARES[k.removesuffix(" hue")] for k in HUE_KINDS}}
 #: What a hypothesis's reading looks like (:func:`features`, before the kind's own copies).
 BASE_FEATURES: tuple[str, ...] = (
     *(f"kind={k}" for k in KINDS),
@@ -115,13 +122,18 @@ def features(h: Hypothesis) -> np.ndarray:
     """The hypothesis as the arbiter sees it, in the order of :data:`FEATURES`."""
     conf = h.probs.reshape(-1, 3).max(axis=1)
     side = max(cell_side_px(h.found, h.n), 1e-6)
-    kind = [float(h.kind.removesuffix(" page") == k) for k in KINDS]  # a page kind as its share's
+    kind = [float(base_kind(h.kind) == k) for k in KINDS]  # a page or hue kind as its share's
     base = np.array([*kind, float(h.n == 5), conf.mean(), conf.min(), np.log(np.clip(conf, 1e-4, 1.0)).mean(),
                      float((h.probs.reshape(-1, 3).argmax(axis=1) > 0).mean()), h.err / side,
                      min(math.log(max(h.n * side / max(h.diag, 1.0), 1e-3)), 2.0), h.line_ref, h.coverage,
                      min(max(h.score, -1.0), 2.0),  # a '#' the search scored -inf still reads
                      min(area_ratio(h.found, h.n), 10.0), min(wiggle(h), 2.0)])
     return with_kinds(base)
+
+
+def base_kind(kind: str) -> str:
+    """The kind of :data:`KINDS` a hypothesis kind is weighed as: a page or hue kind as its share's."""
+    return kind.removesuffix(" page").removesuffix(" hue")
 
 
 def area_ratio(H: np.ndarray, n: int) -> float:

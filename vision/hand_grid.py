@@ -22,7 +22,8 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
    or graph paper (:mod:`~kinegym.vision.ruling`): the '#' is first sought in the ink darker
    than 1.6x the rules' (where its lines stand alone), less the rules' colour, then with it,
    dropping tracks that run on as dark at both ends (heavier rules); else only tracks with
-   1.5x the rules' ink or another colour stay candidates. The rules' ink
+   1.5x the rules' ink or another colour stay candidates (a search asked for ``other_colour``
+   takes only the ink not of the rules' colour, however pale). The rules' ink
    (:attr:`HashGrid.rules`) is cleared from the cells (:func:`~kinegym.vision.ruling.clear_rules`).
 4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
    pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
@@ -390,7 +391,7 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
 
 
 def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None,
-                   share: float | None = None) -> HashGrid:
+                   share: float | None = None, other_colour: bool = False) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
     threshold is ``share`` of the strongest ink (:func:`~kinegym.vision.ink.ink_mask`); by default
@@ -398,21 +399,26 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
     marks). All ink above the noise (share 0) that finds none is tried again above each region's
     own noise where that is lower (a textured table around the page raises the whole map's above
     a pencil '#'). ``colour``, the map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets
-    the lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines."""
+    the lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines.
+    ``other_colour``: on ruled paper whose rules have a colour of their own, the '#' only in the ink
+    not of that colour, however pale (no darker-than-the-rules gate); elsewhere nothing is found."""
     if share is not None and not 0.0 <= share < 1.0:
         raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
     tries = [(0.22, False), (0.0, False)] if share is None else [(float(share), False)]
     first: NoBoardError | None = None
     for level, local in tries + ([(0.0, True)] if tries[-1][0] == 0.0 else []):
         try:
-            return _find_hash_grid(d, sizes, level, colour, local=local)
+            return _find_hash_grid(d, sizes, level, colour, local=local, other_colour=other_colour)
         except NoBoardError as exc:
             first = first or exc
     raise first  # type: ignore[misc]
 
 
 def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
-                    above: float = 0.0, ruling: Ruling | None = None, local: bool = False) -> HashGrid:
+                    above: float = 0.0, ruling: Ruling | None = None, local: bool = False,
+                    other_colour: bool = False) -> HashGrid:
+    """:func:`find_hash_grid` at one ink level; ``ruling`` (with ``above``, the rules' darkness
+    times 1.6, or 0) marks the search on ruled paper's own terms, inside the search that found it."""
     mask, t, width = ink_mask(d, share, above, local)
     if ruling is not None and ruling.by_colour and colour is not None:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
@@ -431,7 +437,8 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     grids, first = [], None
     for phi_a, phi_b in _directions(mask, width):  # a rival second direction is tried too: the better '#' wins
         try:
-            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b))
+            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b,
+                                     other_colour))
         except NoBoardError as exc:
             first = first or exc
     if not grids:
@@ -441,7 +448,7 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
 
 def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
                 ruling: Ruling | None, mask: np.ndarray, traced: Callable[[float], list[Track]], t: float | np.ndarray,
-                width: float, phi_a: float, phi_b: float) -> HashGrid:
+                width: float, phi_a: float, phi_b: float, other_colour: bool = False) -> HashGrid:
     """:func:`_find_hash_grid` for one pair of line directions (``traced``: a direction's tracks)."""
     fa, fb = traced(phi_a), traced(phi_b)
     side = float(max(d.shape))
@@ -450,8 +457,15 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
     # evenly spaced tracks with no long straight run of ink among them are no ruling to clear
     rules = r if ruled and (r := rules_mask(mask, ruled, max(9, int(0.06 * side)))).any() else None
     # (the search above the rules judges tracks by the ruling it was given: its own only joins the clearing)
-    own = Ruling.of(rules, ruled, d, colour) if rules is not None and not above else None
-    if own is not None and not above:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
+    own = Ruling.of(rules, ruled, d, colour) if rules is not None and ruling is None else None
+    if other_colour and ruling is None:  # only the ink not of the rules' colour, however pale
+        if own is None or own.hue is None:
+            raise NoBoardError("no ruled paper whose rules have a colour of their own")
+        grid = _find_hash_grid(d, sizes, share, colour, 0.0, dataclasses.replace(own, by_colour=True))
+        grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
+        grid.rule_hue = own.hue
+        return grid
+    if own is not None:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
         darker = 1.6 * float(np.median(d[own.rules > 0]))
         # first with the rules' colour left out (a pen of another colour), then all of that ink
         for inner in ((dataclasses.replace(own, by_colour=True), own) if own.hue is not None else (own,)):

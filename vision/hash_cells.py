@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from .grid_choice import Hypothesis, same_lattice
-from .hand_grid import HashGrid, crossing_lattice, erase_mask, find_hash_grid
+from .grid_choice import HUE_KINDS, PAGE_KINDS, SHARES, Hypothesis, same_lattice
+from .hand_grid import HashGrid, crossing_lattice, erase_mask, find_hash_grid, search_copy
+from .ink import ink_colour, ink_map
 from .page import page_apart
 from .ruling import clear_rules
 
@@ -51,6 +52,14 @@ class SearchCopy:
     rgb: np.ndarray
     d: np.ndarray
     colour: np.ndarray
+    ruled: bool = False  # a '#' was found on ruled paper (:attr:`~kinegym.vision.hand_grid.HashGrid.rules`)
+
+    @classmethod
+    def of(cls, working: np.ndarray, photo: np.ndarray | None) -> SearchCopy:
+        """The search copy of the reader's ``working`` copy of a ``photo`` (None: not its own means)."""
+        small = search_copy(working, photo)
+        st = max(6.0, math.hypot(*small.shape[:2]) / 100)
+        return cls(small, ink_map(small, stroke_px=st), ink_colour(small, stroke_px=st))
 
     @cached_property
     def page(self) -> np.ndarray | None:
@@ -58,26 +67,28 @@ class SearchCopy:
 
 
 def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object],
-              hashed: SearchCopy, share: float, made: Sequence[Hypothesis] = (), on_page: bool = False
-              ) -> Hypothesis | None:
+              hashed: SearchCopy, kind: str, made: Sequence[Hypothesis] = ()) -> Hypothesis | None:
     """The board as a hand-drawn '#' (:mod:`~kinegym.vision.hand_grid`): the grid found, at
-    ink ``share``, in ``hashed`` - a copy of the photo
+    the ink share of ``kind`` (:data:`~kinegym.vision.grid_choice.SHARES`), in ``hashed`` - a copy of the photo
     :data:`~kinegym.vision.hand_grid.GRID_SIDE_PX` on its longer side (the same scale
     whatever the camera; :func:`~kinegym.vision.hand_grid.search_copy`), its ink map and
     colour - its lines erased from the ink ``d``, the cells read with the outer cells
     reaching past the field. None, before any cell is read, when the grid is one of the '#'s
     ``made``; a straight field on the same lattice is read again the '#' way (its cells with the
     photo's own ink level and the larger outer cells), and the arbiter weighs both readings.
-    ``on_page``: the '#' sought in the ink on the page alone; None when the page is not apart
-    from the rest of the photo (nothing new to seek)."""
+    A page kind seeks the '#' in the ink on the page alone (None when the page is not apart from
+    the rest of the photo: nothing new to seek); a hue kind in the ink not of ruled paper's colour
+    (:func:`~kinegym.vision.hand_grid.find_hash_grid`'s ``other_colour``). A '#' found on ruled
+    paper marks ``hashed.ruled``."""
     h, w = d.shape
     dg, colour = hashed.d, hashed.colour
-    if on_page:
+    if kind in PAGE_KINDS:
         if hashed.page is None:
             return None
         dg = np.where(hashed.page > 0, dg, np.float32(0.0))
     sizes = (reader.size,) if reader.size is not None else (3, 5)
-    grid = find_hash_grid(dg, sizes, colour, share=share)
+    grid = find_hash_grid(dg, sizes, colour, share=SHARES[kind], other_colour=kind in HUE_KINDS)
+    hashed.ruled |= grid.rules is not None
     fx, fy = w / dg.shape[1], h / dg.shape[0]
     to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])
     found = to_d @ grid.H
