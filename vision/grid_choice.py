@@ -43,8 +43,8 @@ PAGE_KINDS: tuple[str, ...] = tuple(f"{k} page" for k in KINDS if k != "straight
 #: On ruled or graph paper whose rules have a colour of their own, the '#' sought last at 22 % and
 #: 0 % in the ink not of the rules' colour, however pale (a teal '#' on blue rules, no darker
 #: than they are; :func:`~kinegym.vision.hand_grid.find_hash_grid`'s ``other_colour``), when
-#: none was sure; the arbiter weighs each as the kind of its share (stop 62: +3 -1 boards on
-#: 1,000 real-like photos, the real photos' readings as they were).
+#: none was sure and a '#' found before lay on ruled paper; the arbiter weighs each as the kind of
+#: its share (stop 62: +2 -1 boards on 1,000 real-like photos, the real photos' readings as they were).
 HUE_KINDS: tuple[str, ...] = ("hash 22% hue", "hash 0% hue")
 _HASH_SHARES = {"hash 22%": 0.22, "hash 45%": 0.45, "hash 0%": 0.0}
 #: Hash kinds' ink shares (see :func:`~kinegym.vision.hand_grid.find_hash_grid`); a page or hue kind's is its share's.
