@@ -131,12 +131,22 @@ def test_a_pale_hash_of_another_colour_on_graph_paper_is_found_in_its_colour_alo
     grid = find_hash_grid(d, (3,), colour, share=0.22, other_colour=True)
     assert grid.n == 3 and np.abs(grid.crossings.reshape(-1, 2) - truth).max() <= 3
     assert grid.rules is not None and grid.rule_hue is not None
+    rulings: dict[tuple[float, bool], list[Ruling]] = {}  # the reader's memo: the level's search records its rulings,
+    find_hash_grid(d, (3,), colour, share=0.22, rulings=rulings)  # and the search in another colour starts from them
+    assert list(rulings) == [(0.22, False)] and rulings[(0.22, False)]
+    again = find_hash_grid(d, (3,), colour, share=0.22, other_colour=True, rulings=rulings)
+    np.testing.assert_array_equal(again.crossings, grid.crossings)
+    assert again.score == grid.score and (again.rules == grid.rules).all()
     assert float(grid.rule_hue @ (BLUE / np.linalg.norm(BLUE))) > 0.99  # the rules' colour, to clear from the cells
     blank, hue = np.zeros_like(d), np.zeros_like(colour)
     _red_hash(blank, hue, (198, 294), (210, 294), 0.4)
     assert np.abs(find_hash_grid(blank, (3,), hue, share=0.22).crossings.reshape(-1, 2) - truth).max() <= 3
     with pytest.raises(NoBoardError, match="no ruled paper whose rules have a colour of their own"):
         find_hash_grid(blank, (3,), hue, share=0.22, other_colour=True)
+    none: dict[tuple[float, bool], list[Ruling]] = {}
+    find_hash_grid(blank, (3,), hue, share=0.22, rulings=none)
+    with pytest.raises(NoBoardError, match="no ruled paper whose rules have a colour of their own"):
+        find_hash_grid(blank, (3,), hue, share=0.22, other_colour=True, rulings=none)
 
 
 def test_a_teal_hash_on_blue_graph_paper_is_read_by_the_hue_kind(monkeypatch: pytest.MonkeyPatch) -> None:

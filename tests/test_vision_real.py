@@ -16,8 +16,8 @@ from kinegym.envs.sim.scenes_real import real_like_scene
 from kinegym.vision import board_reader, ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.grid_choice import HUE_KINDS, same_lattice
-from kinegym.vision.hand_grid import FLICK_CELLS, HashGrid, Track, erase_mask
-from kinegym.vision.hash_cells import MAX_PERSPECTIVE, affine_lattice, perspective_ratio
+from kinegym.vision.hand_grid import HashGrid, Track
+from kinegym.vision.hash_cells import FLICK_CELLS, MAX_PERSPECTIVE, affine_lattice, erase_mask, perspective_ratio
 from kinegym.vision.image_io import read_image
 from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
 from kinegym.vision.polylines import resample

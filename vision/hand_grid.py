@@ -53,16 +53,12 @@ from .ink import colour_at, ink_mask, median_at, unit
 from .polylines import extend, first_crossing, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
-__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "erase_mask", "search_copy", "crossing_lattice"]
+__all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
 
 #: The longer side of the working copy the grid is searched on (px).
 GRID_SIDE_PX = 480
 _BANDS = 18  # bands across a family (each about a 1/18 of the image)
-#: The most a flick at a '#' line's tip spans (cells, its box's longer side) that
-#: :func:`erase_mask` takes for the line's. Uncapped, a piece in which graph paper's rules
-#: joined marks up went with the line, marks and all (stop 60: +13 -2 of 1,000 real-like photos);
-#: at 0.75 a real wavy line's untraced tail (0.85 cell) stayed and read as an X.
-FLICK_CELLS = 1.0
+NO_HUED_RULING = "no ruled paper whose rules have a colour of their own"
 _RIVAL = 0.5  # a second direction peak this high (above the median energy) as the first is tried too
 
 
@@ -391,7 +387,8 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
 
 
 def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None,
-                   share: float | None = None, other_colour: bool = False) -> HashGrid:
+                   share: float | None = None, other_colour: bool = False,
+                   rulings: dict[tuple[float, bool], list[Ruling]] | None = None) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
     threshold is ``share`` of the strongest ink (:func:`~kinegym.vision.ink.ink_mask`); by default
@@ -401,14 +398,16 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
     a pencil '#'). ``colour``, the map's RGB darkness (:func:`~kinegym.vision.ink.ink_colour`), lets
     the lines' pen count: one '#' is drawn in one colour, and rules of another colour are not its lines.
     ``other_colour``: on ruled paper whose rules have a colour of their own, the '#' only in the ink
-    not of that colour, however pale (no darker-than-the-rules gate); elsewhere nothing is found."""
+    not of that colour, however pale (no darker-than-the-rules gate); elsewhere nothing is found.
+    ``rulings``: a memo for one map - each ink level's search records the rulings it found there, and
+    an ``other_colour`` search at a level recorded starts from them instead of tracing that level again."""
     if share is not None and not 0.0 <= share < 1.0:
         raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
     tries = [(0.22, False), (0.0, False)] if share is None else [(float(share), False)]
     first: NoBoardError | None = None
     for level, local in tries + ([(0.0, True)] if tries[-1][0] == 0.0 else []):
         try:
-            return _find_hash_grid(d, sizes, level, colour, local=local, other_colour=other_colour)
+            return _find_hash_grid(d, sizes, level, colour, local=local, other_colour=other_colour, rulings=rulings)
         except NoBoardError as exc:
             first = first or exc
     raise first  # type: ignore[misc]
@@ -416,9 +415,14 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
 
 def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
                     above: float = 0.0, ruling: Ruling | None = None, local: bool = False,
-                    other_colour: bool = False) -> HashGrid:
+                    other_colour: bool = False, rulings: dict[tuple[float, bool], list[Ruling]] | None = None
+                    ) -> HashGrid:
     """:func:`find_hash_grid` at one ink level; ``ruling`` (with ``above``, the rules' darkness
     times 1.6, or 0) marks the search on ruled paper's own terms, inside the search that found it."""
+    level = (share, local)
+    if other_colour and rulings is not None and level in rulings:  # this level's rulings, already found
+        return _best([_try(_in_other_colour, d, sizes, share, colour, own) for own in rulings[level]]
+                     or [NoBoardError(NO_HUED_RULING)])
     mask, t, width = ink_mask(d, share, above, local)
     if ruling is not None and ruling.by_colour and colour is not None:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
@@ -434,22 +438,47 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
                 tr.colour = None if colour is None else colour_at(d, colour, tr.pts)
         return memo[phi]
 
-    grids, first = [], None
-    for phi_a, phi_b in _directions(mask, width):  # a rival second direction is tried too: the better '#' wins
-        try:
-            grids.append(_hash_along(d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b,
-                                     other_colour))
-        except NoBoardError as exc:
-            first = first or exc
+    owns: list[Ruling] = []  # the rulings found along each pair of directions
+    tried = [_try(_hash_along, d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b,
+                  other_colour, owns)
+             for phi_a, phi_b in _directions(mask, width)]  # a rival second direction is tried too: the better wins
+    if rulings is not None and ruling is None:
+        rulings[level] = owns
+    return _best(tried)
+
+
+def _try(f: Callable[..., HashGrid], *args: object) -> HashGrid | NoBoardError:
+    try:
+        return f(*args)
+    except NoBoardError as exc:
+        return exc
+
+
+def _best(tried: list[HashGrid | NoBoardError]) -> HashGrid:
+    """The best '#' of those found (its score per line), else the first reason none was."""
+    grids = [g for g in tried if isinstance(g, HashGrid)]
     if not grids:
-        raise first  # type: ignore[misc]
+        raise next((e for e in tried if isinstance(e, NoBoardError)), NoBoardError("no line directions in the ink"))
     return max(grids, key=lambda g: g.score / (2 * (g.n - 1)))
+
+
+def _in_other_colour(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
+                     own: Ruling | None) -> HashGrid:
+    """The '#' in the ink not of ruling ``own``'s colour, however pale (:func:`find_hash_grid`'s ``other_colour``)."""
+    if own is None or own.hue is None:
+        raise NoBoardError(NO_HUED_RULING)
+    grid = _find_hash_grid(d, sizes, share, colour, 0.0, dataclasses.replace(own, by_colour=True))
+    grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
+    grid.rule_hue = own.hue
+    return grid
 
 
 def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
                 ruling: Ruling | None, mask: np.ndarray, traced: Callable[[float], list[Track]], t: float | np.ndarray,
-                width: float, phi_a: float, phi_b: float, other_colour: bool = False) -> HashGrid:
-    """:func:`_find_hash_grid` for one pair of line directions (``traced``: a direction's tracks)."""
+                width: float, phi_a: float, phi_b: float, other_colour: bool = False, owns: list[Ruling] | None = None
+                ) -> HashGrid:
+    """:func:`_find_hash_grid` for one pair of line directions (``traced``: a direction's tracks); the
+    paper's own ruling, if any, is added to ``owns``."""
     fa, fb = traced(phi_a), traced(phi_b)
     side = float(max(d.shape))
     ruled_a, ruled_b = is_ruled(fa, side), is_ruled(fb, side)
@@ -458,13 +487,10 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
     rules = r if ruled and (r := rules_mask(mask, ruled, max(9, int(0.06 * side)))).any() else None
     # (the search above the rules judges tracks by the ruling it was given: its own only joins the clearing)
     own = Ruling.of(rules, ruled, d, colour) if rules is not None and ruling is None else None
+    if own is not None and owns is not None:
+        owns.append(own)
     if other_colour and ruling is None:  # only the ink not of the rules' colour, however pale
-        if own is None or own.hue is None:
-            raise NoBoardError("no ruled paper whose rules have a colour of their own")
-        grid = _find_hash_grid(d, sizes, share, colour, 0.0, dataclasses.replace(own, by_colour=True))
-        grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
-        grid.rule_hue = own.hue
-        return grid
+        return _in_other_colour(d, sizes, share, colour, own)
     if own is not None:  # ruled paper: the '#' in the ink darker than the rules, if it shows there
         darker = 1.6 * float(np.median(d[own.rules > 0]))
         # first with the rules' colour left out (a pen of another colour), then all of that ink
@@ -559,40 +585,3 @@ def _dense(tr: Track, width: float) -> np.ndarray:
     Minv = cv2.invertAffineTransform(M)
     return np.stack([x, rows], axis=1) @ Minv[:, :2].T + Minv[:, 2]
 
-
-def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
-    """uint8 mask (the shape of ``d``, the map the grid was found on) of the chosen lines'
-    ink: along their dense traces, a pen width and a half either side, plus any stroke left
-    hanging at a line's tip (a hand-drawn line often ends in a hook or a flick that leaves
-    its straight course; left in, it would read as a mark in an outer cell). A flick is
-    elongated and no more than :data:`FLICK_CELLS` of a cell across: a larger piece at a tip is
-    a mark, or marks joined up by graph paper's rules, and stays."""
-    out = np.zeros(d.shape, np.uint8)
-    thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
-    tips = np.zeros(d.shape, np.uint8)
-    for tr in grid.cols + grid.rows:
-        p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
-        cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
-        for tip in (tr.dense[0], tr.dense[-1]):
-            cv2.circle(tips, tuple(int(v) for v in np.rint(tip)), int(thick + 2), 1, -1)
-    g = grid.crossings
-    cell = float(np.median(np.concatenate([np.hypot(*np.diff(g, axis=k).reshape(-1, 2).T) for k in (0, 1)])))
-    left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
-    n_lab, lab = cv2.connectedComponents(left, connectivity=8)
-    touching = np.unique(lab[(tips > 0) & (left > 0)])
-    touching = touching[touching > 0]
-    wanted = np.zeros(n_lab, bool)
-    wanted[touching] = True
-    at = np.flatnonzero(wanted[lab.ravel()])  # the touching pieces' px in one pass, row by row
-    of = lab.ravel()[at]
-    for c in touching:
-        ys, xs = np.divmod(at[of == c], d.shape[1])
-        if len(xs) < 3:
-            out[ys, xs] = 1
-            continue
-        if max(xs.max() - xs.min(), ys.max() - ys.min()) > FLICK_CELLS * cell:
-            continue  # too large for a flick
-        ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
-        if ev[1] > 5.0 * max(ev[0], 1e-6):  # a flick or hook (elongated), not a mark touching the tip
-            out[ys, xs] = 1
-    return out
