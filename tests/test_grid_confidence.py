@@ -47,9 +47,13 @@ def test_read_board_says_an_unsure_grid(tmp_path: Path, capsys: pytest.CaptureFi
     assert main(["read-board", str(photo), "--size", "3", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["unsure"] is True and out["grid_confidence"] < UNSURE_GRID
+    tried = out["grids_tried"]  # each grid hypothesis made, and the one read: the most probable
+    assert tried and out["grid_kind"] == max(tried, key=lambda t: t["p"])["kind"]
+    assert out["grid_confidence"] == pytest.approx(max(t["p"] for t in tried))
     assert main(["read-board", str(photo), "--size", "3"]) == 0
     text = capsys.readouterr().out
     assert "unsure grid" in text and "grid confidence 0.0" in text
+    assert f"({out['grid_kind']}, {len(tried)} grid{'s' * (len(tried) != 1)} tried)" in text
     assert main(["read-board", str(REAL / "kvuletic2_image4.jpeg"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["unsure"] is False and out["grid_confidence"] > UNSURE_GRID and out["board"] == "XO.|.X.|..."

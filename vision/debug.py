@@ -17,8 +17,8 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
     """An RGB picture of what the reader did: the straight lines it found (columns red,
     rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
     each cell's call with its confidence (orange with a star where the count rule called the cell
-    otherwise than its own most probable call), the grid's confidence at the top left (red: an
-    unsure grid) - or, without a board, the reason in red."""
+    otherwise than its own most probable call), the grid's confidence and the kind of grid
+    hypothesis read at the top left (red: an unsure grid) - or, without a board, the reason in red."""
     img = _as_rgb(image).copy()
     k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
     for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
@@ -53,7 +53,9 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
                             (230, 120, 0) if changed else (0, 120, 0), 1, cv2.LINE_AA)
     if reading is not None and reading.grid_confidence is not None:  # the arbiter's word on the grid
         unsure = reading.unsure
-        text = f"{'unsure grid' if unsure else 'grid confidence'} {reading.grid_confidence:.2f}"
+        tried = trace.get("hypotheses") or []  # (kind, probability) of each grid made; the most probable was read
+        kind = f" ({max(tried, key=lambda kp: kp[1])[0]})" if tried else ""  # type: ignore[arg-type, index]
+        text = f"{'unsure grid' if unsure else 'grid confidence'} {reading.grid_confidence:.2f}{kind}"
         cv2.putText(img, text, (8, 40 if error else 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5,  # under an error, if any
                     (220, 0, 0) if unsure else (0, 120, 0), 1, cv2.LINE_AA)
     if error:

@@ -116,7 +116,10 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     if args.debug:
         _save(debug_image(rgb, r, trace), args.debug)
     rows = r.text().split("|")
-    judged = "" if r.grid_confidence is None else f"; grid confidence {r.grid_confidence:.2f}"
+    tried = [(str(k), float(p)) for k, p in trace.get("hypotheses", [])]  # type: ignore[attr-defined]
+    kind = max(tried, key=lambda kp: kp[1])[0] if tried else None  # the reader's choice: the most probable made
+    judged = "" if r.grid_confidence is None else (f"; grid confidence {r.grid_confidence:.2f} ({kind}, "
+                                                   f"{len(tried)} grid{'s' * (len(tried) != 1)} tried)")
     text = [f"{r.n} x {r.n} board in {path.name} ({ms:.1f} ms; grid fit {r.grid_error_px:.2f} px over "
             f"{r.grid_points} crossings{judged}; lowest cell confidence {r.confidence.min():.2f})"]
     if r.unsure:
@@ -134,7 +137,7 @@ def cmd_read_board(args: argparse.Namespace) -> int:
                  "confidence": np.round(r.confidence, 4).tolist(), "corners_px": np.round(r.corners(), 2).tolist(),
                  "grid_error_px": r.grid_error_px, "grid_confidence": r.grid_confidence, "unsure": r.unsure,
                  "frame": list(r.frame), "ms": ms, "debug": args.debug,
-                 "count_changed": changed},
+                 "count_changed": changed, "grid_kind": kind, "grids_tried": [{"kind": k, "p": p} for k, p in tried]},
           "\n".join(text))
     return EXIT_OK
 
