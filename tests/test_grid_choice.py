@@ -87,6 +87,7 @@ def test_hypotheses_are_made_once_per_grid_and_traced() -> None:
     made = trace["hypotheses"]
     assert made and all(kind in order and 0.0 <= p <= 1.0 for kind, p in made)  # type: ignore[union-attr]
     best = max(made, key=lambda kp: kp[1])  # type: ignore[arg-type, union-attr]
+    assert trace["kind"] == best[0]  # the kind read, as read-board and the debug picture say it
     assert reading.cells.shape == (3, 3) and trace["cell_inputs"] is not None
     chosen = next(h for h in hyps if h.kind == best[0])  # the same grids, made by a reader without an arbiter
     assert chosen.scale < 1.0  # a 1,280 px photo, read on an 800 px working copy

@@ -135,9 +135,9 @@ class BoardReader:
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
 
-        ``trace``, if given, is filled with the intermediate results (lines, lattice, ...),
-        in the coordinates of the possibly shrunk working image (``trace["scale"]``), for
-        :func:`debug_image`, ``trace["hypotheses"]``: each grid tried, (kind, probability),
+        ``trace``, if given, is filled with the intermediate results (lines, lattice, ...), in the
+        coordinates of the possibly shrunk working image (``trace["scale"]``), for :func:`debug_image`,
+        ``trace["hypotheses"]``: each grid tried, (kind, probability), ``trace["kind"]``: the one read,
         ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``), and
         ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise."""
         made, reasons = [], []
@@ -154,7 +154,7 @@ class BoardReader:
         conf = np.take_along_axis(best.probs, cells[..., None], axis=-1)[..., 0]
         if trace is not None:  # count_changed: the cells the count rule called otherwise than their own call
             trace.update(best.trace)
-            trace["hypotheses"] = [(h.kind, h.p) for h in made]
+            trace["hypotheses"], trace["kind"] = [(h.kind, h.p) for h in made], best.kind
             trace["count_changed"] = [(int(r), int(c)) for r, c in np.argwhere(cells != best.probs.argmax(axis=-1))]
         scale, H, err = best.scale, best.H, best.err
         if scale < 1.0:  # the working copy's px to the photo's

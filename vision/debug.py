@@ -53,8 +53,7 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
                             (230, 120, 0) if changed else (0, 120, 0), 1, cv2.LINE_AA)
     if reading is not None and reading.grid_confidence is not None:  # the arbiter's word on the grid
         unsure = reading.unsure
-        tried = trace.get("hypotheses") or []  # (kind, probability) of each grid made; the most probable was read
-        kind = f" ({max(tried, key=lambda kp: kp[1])[0]})" if tried else ""  # type: ignore[arg-type, index]
+        kind = f" ({trace['kind']})" if "kind" in trace else ""  # the kind of grid hypothesis read
         text = f"{'unsure grid' if unsure else 'grid confidence'} {reading.grid_confidence:.2f}{kind}"
         cv2.putText(img, text, (8, 40 if error else 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5,  # under an error, if any
                     (220, 0, 0) if unsure else (0, 120, 0), 1, cv2.LINE_AA)

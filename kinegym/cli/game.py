@@ -116,8 +116,8 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     if args.debug:
         _save(debug_image(rgb, r, trace), args.debug)
     rows = r.text().split("|")
-    tried = [(str(k), float(p)) for k, p in trace.get("hypotheses", [])]  # type: ignore[attr-defined]
-    kind = max(tried, key=lambda kp: kp[1])[0] if tried else None  # the reader's choice: the most probable made
+    tried = [(str(k), float(p)) for k, p in trace["hypotheses"]]  # type: ignore[attr-defined]
+    kind = trace["kind"]
     judged = "" if r.grid_confidence is None else (f"; grid confidence {r.grid_confidence:.2f} ({kind}, "
                                                    f"{len(tried)} grid{'s' * (len(tried) != 1)} tried)")
     text = [f"{r.n} x {r.n} board in {path.name} ({ms:.1f} ms; grid fit {r.grid_error_px:.2f} px over "
