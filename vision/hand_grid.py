@@ -467,7 +467,14 @@ def _in_other_colour(d: np.ndarray, sizes: tuple[int, ...], share: float, colour
     """The '#' in the ink not of ruling ``own``'s colour, however pale (:func:`find_hash_grid`'s ``other_colour``)."""
     if own is None or own.hue is None:
         raise NoBoardError(NO_HUED_RULING)
-    grid = _find_hash_grid(d, sizes, share, colour, 0.0, dataclasses.replace(own, by_colour=True))
+    return _on_ruled_paper(d, sizes, share, colour, 0.0, dataclasses.replace(own, by_colour=True), own)
+
+
+def _on_ruled_paper(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None, above: float,
+                    inner: Ruling, own: Ruling) -> HashGrid:
+    """The '#' sought on ruled paper's terms ``inner`` above ``above``; it carries the paper's rules
+    and their colour (``own``), to be cleared from the cells."""
+    grid = _find_hash_grid(d, sizes, share, colour, above, inner)
     grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
     grid.rule_hue = own.hue
     return grid
@@ -496,10 +503,7 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
         # first with the rules' colour left out (a pen of another colour), then all of that ink
         for inner in ((dataclasses.replace(own, by_colour=True), own) if own.hue is not None else (own,)):
             with contextlib.suppress(NoBoardError):
-                grid = _find_hash_grid(d, sizes, share, colour, darker, inner)
-                grid.rules = own.rules if grid.rules is None else grid.rules | own.rules
-                grid.rule_hue = own.hue
-                return grid
+                return _on_ruled_paper(d, sizes, share, colour, darker, inner, own)
     fa = without_rules(fa, side) if ruled_a else fa
     fb = without_rules(fb, side) if ruled_b else fb
     if ruling is not None:  # heavier rules (every fifth, say) are as dark as a pen: they run on along a rule
