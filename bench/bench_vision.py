@@ -5,6 +5,7 @@ Run::
     taskset -c 0 python bench/bench_vision.py [--images 500] [--quick]
     taskset -c 0 python bench/bench_vision.py --real-like-only --images 300 --real-like-from 40000
     python bench/bench_vision.py --real-like-only --images 300 --real-like-from 40000 --why
+    taskset -c 0 python bench/bench_vision.py --real-like-only --accept-curve --images 300 --real-like-from 40000
 
 Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
 
@@ -32,6 +33,12 @@ corner; a mark missed, one invented, X and O swapped). The seed's
 over the field, as the thesis fixed its camera) and, as in the thesis, told which cells
 are the arm's (the X cells) so that it can name the rest O. In the lab set it is calibrated
 for each photo's exact camera pose (its best case); in the others for the nominal pose.
+
+``--accept P`` makes every reader take the first grid hypothesis at least ``P`` probable
+(``BoardReader(accept=P)``; default the shipped arbiter's level); ``--real-like-only
+--accept-curve`` reads each real-like photo at the levels of :data:`CURVE_LEVELS`, one after the
+other, and prints boards and cells right, time per frame and grids read per level: what a faster
+reader costs.
 """
 
 from __future__ import annotations
@@ -77,13 +84,22 @@ def main() -> None:
     ap.add_argument("--why", action="store_true",
                     help="with the real-like set: why each board read wrong was wrong (the grid not found, "
                          "another grid chosen, or its cells), against the scene's own crossings")
+    ap.add_argument("--accept", type=float, default=None, metavar="P",
+                    help="the readers' accept level, 0..1 (BoardReader(accept=P); default: the shipped arbiter's)")
+    ap.add_argument("--accept-curve", action="store_true",
+                    help="with --real-like-only: each photo read at accept levels 0 to 1, boards right against time")
     args = ap.parse_args()
+    if args.accept is not None and not 0.0 <= args.accept <= 1.0:
+        ap.error(f"--accept {args.accept}; expected a probability in 0..1")
     if args.real_only:
-        real_photos(max(1, args.repeat))
+        real_photos(max(1, args.repeat), args.accept)
         return
     count = 60 if args.quick else args.images
+    if args.real_like_only and args.accept_curve:
+        accept_curve(count, args.real_like_from)
+        return
     if args.real_like_only:
-        real_like(count, args.real_like_from, args.why)
+        real_like(count, args.real_like_from, args.why, args.accept)
         return
     print(f"{count} images per set, 640 x 480")
     print("| set | reader | cells right | boards right | X vs O right | refused | ms per frame median / p95 |")
@@ -91,7 +107,7 @@ def main() -> None:
     for k, (name, n, difficulty, distractors) in enumerate(SETS):
         res = {"ours": [0, 0, 0, 0, 0], "threshold": [0, 0, 0, 0, 0]}  # cells ok, boards ok, xo, xo ok, refused
         times = []
-        reader = BoardReader(size=n)
+        reader = BoardReader(size=n, accept=args.accept)
         for i in range(count):
             sc = random_scene(100_000 * (k + 1) + i, n=n, difficulty=difficulty, distractors=distractors)
             img = sc.photo.image
@@ -120,18 +136,18 @@ def main() -> None:
             ms = f"{np.median(t):.1f} / {np.percentile(t, 95):.1f}" if key == "ours" else "-"
             print(f"| {name} | {label} | {r[0] / (count * n * n):.2%} | {r[1] / count:.1%} | "
                   f"{r[3] / max(r[2], 1):.2%} | {r[4]} | {ms} |", flush=True)
-    real_photos()
-    real_like(count, args.real_like_from, args.why)
+    real_photos(1, args.accept)
+    real_like(count, args.real_like_from, args.why, args.accept)
 
 
-def real_like(count: int, first: int = 20_000, why: bool = False) -> None:
+def real_like(count: int, first: int = 20_000, why: bool = False, accept: float | None = None) -> None:
     """The real-like set, seeds ``first`` on: per surface and in all, cells and boards right, X
     vs O, refusals, and the reader's time by photo width; with ``why``, then why the boards
-    read wrong were wrong (:func:`why_wrong`, :func:`print_why`)."""
+    read wrong were wrong (:func:`why_wrong`, :func:`print_why`); ``accept``: the reader's level."""
     from kinegym.envs.sim.scenes_real import real_like_scene
     from kinegym.vision.cell_model import rule_probs
 
-    reader = BoardReader(size=3)
+    reader = BoardReader(size=3, accept=accept)
     rows: dict[str, list] = {}
     wrong: list[tuple[str, list[tuple[str, str]]]] = []
     for i in range(count):
@@ -178,6 +194,42 @@ def real_like(count: int, first: int = 20_000, why: bool = False) -> None:
               f"{np.mean([r[4] for r in res]):.2f} |", flush=True)
     if why:
         print_why(wrong, count)
+
+
+#: The accept levels of :func:`accept_curve` (None: the shipped arbiter's own).
+CURVE_LEVELS = (0.0, 0.5, 0.8, 0.9, None, 0.97, 1.0)
+
+
+def accept_curve(count: int, first: int = 20_000) -> None:
+    """Speed against boards right: each real-like photo (seeds ``first`` on) read by readers that
+    differ only in their accept level (:data:`CURVE_LEVELS`, ``BoardReader(accept=...)``), one
+    after the other on the same photo; per level the boards and cells right, the time per frame
+    and the grid hypotheses made per photo."""
+    from kinegym.envs.sim.scenes_real import real_like_scene
+
+    readers = [BoardReader(size=3, accept=a) for a in CURVE_LEVELS]
+    res = [[0, 0, [], []] for _ in readers]  # boards, cells, ms, hypotheses made
+    for i in range(count):
+        sc = real_like_scene(first + i)
+        for reader, r in zip(readers, res):
+            trace: dict[str, object] = {}
+            t0 = time.perf_counter()
+            try:
+                got = reader.read(sc.image, trace).cells
+            except NoBoardError:
+                got = None
+            r[2].append((time.perf_counter() - t0) * 1e3)
+            r[3].append(len(trace.get("hypotheses", [])))  # type: ignore[arg-type]
+            if got is not None:
+                r[0], r[1] = r[0] + bool((got == sc.cells).all()), r[1] + int((got == sc.cells).sum())
+    print(f"\n{count} real-like photos (3 x 3, seeds {first:,} on), each read at every accept level")
+    print("| accept | boards right | cells right | ms per frame median / mean / p95 | grids read per photo |")
+    print("|---|---|---|---|---|")
+    for a, reader, (boards, cells, ms, made) in zip(CURVE_LEVELS, readers, res):
+        t = np.asarray(ms)
+        level = f"{reader.arbiter.accept:g} (default)" if a is None else f"{a:g}"
+        print(f"| {level} | {boards / count:.1%} | {cells / (9 * count):.2%} | {np.median(t):.1f} / {t.mean():.1f} / "
+              f"{np.percentile(t, 95):.1f} | {np.mean(made):.2f} |", flush=True)
 
 
 #: How near (in cells) a grid's inner crossings must lie to the scene's own to be its '#'.
@@ -323,7 +375,7 @@ def _quarter_turns(board: str) -> list[str]:
     return ["|".join("".join(row) for row in np.rot90(g, k)) for k in range(4)]
 
 
-def real_photos(repeat: int = 1) -> None:
+def real_photos(repeat: int = 1, accept: float | None = None) -> None:
     """The 15 real dev photos (``tests/data/real``, labelled by eye): cells and boards right,
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
     4,000 px phone photo (the reader works at one scale whatever the camera), and under the
@@ -336,7 +388,7 @@ def real_photos(repeat: int = 1) -> None:
 
     data = Path(__file__).resolve().parent.parent / "tests" / "data" / "real"
     labels = json.loads((data / "labels.json").read_text())["boards"]
-    reader = BoardReader(size=3)
+    reader = BoardReader(size=3, accept=accept)
     print("\n| real dev photos (15, whiteboard) | cells right | boards right | refused | ms per frame median / max |")
     print("|---|---|---|---|---|")
     for label, transform, readings in _photo_conditions():

@@ -11,11 +11,12 @@ import pytest
 
 from kinegym.cli import main
 from kinegym.envs.sim.scenes_real import real_like_scene
-from kinegym.vision.board_reader import BoardReader, debug_image
+from kinegym.vision.board_reader import BoardReader, VisionError, debug_image
 from kinegym.vision.image_io import read_image
 from kinegym.vision.reading import UNSURE_GRID
 
 REAL = Path(__file__).parent / "data" / "real"
+LABELS: dict[str, str] = json.loads((REAL / "labels.json").read_text())["boards"]
 #: A real-like photo whose faint '#' lies in a hard shadow beside a striped reflection: the reader
 #: takes the stripes for a grid and reads a board that is not there (seed 30,024, an empty board).
 STRIPES = 30_024
@@ -74,3 +75,31 @@ def test_the_debug_picture_says_the_grid_s_confidence() -> None:
     trace = {}
     sure = debug_image(img, BoardReader(size=3).read(img, trace), trace)
     assert _red_banner(sure) < 5 and not np.array_equal(sure[:28, :260], img[:28, :260])  # in green
+
+
+def test_a_lower_accept_level_makes_fewer_grid_hypotheses(capsys: pytest.CaptureFixture[str]) -> None:
+    """``accept`` trades reading right for speed: 0 takes the first grid found, 1 makes every
+    hypothesis, the default stops at the shipped arbiter's level. Real photo 4's first '#' is 0.78
+    probable, under the shipped 0.94: by default all three hypotheses are made; photo 1's first is
+    0.95: by default it alone is made."""
+    def made(name: str, accept: float | None) -> list[tuple[str, float]]:
+        trace: dict[str, object] = {}
+        reading = BoardReader(size=3, accept=accept).read(read_image(REAL / name), trace)
+        assert reading.text() == LABELS[name]  # both read right at every level
+        return trace["hypotheses"]  # type: ignore[return-value]
+
+    four, one = "kvuletic2_image4.jpeg", "kvuletic2_image1.jpeg"
+    every = {name: [(h.kind, h.p) for h in BoardReader(size=3).hypotheses(read_image(REAL / name))]
+             for name in (four, one)}
+    assert [len(v) for v in every.values()] == [3, 3]
+    assert made(four, None) == made(four, 1.0) == every[four]
+    assert made(four, 0.75) == made(four, 0.0) == every[four][:1]
+    assert made(one, None) == every[one][:1] and made(one, 1.0) == every[one]
+    for bad in (-0.1, 1.5, float("nan"), "0.5"):
+        with pytest.raises(VisionError, match=r"accept=.*expected a probability in \[0, 1\]"):
+            BoardReader(size=3, accept=bad)  # type: ignore[arg-type]
+    assert main(["read-board", str(REAL / "kvuletic2_image4.jpeg"), "--accept", "0", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["grids_tried"]) == 1 and out["board"] == LABELS["kvuletic2_image4.jpeg"]
+    assert main(["read-board", str(REAL / "kvuletic2_image4.jpeg"), "--accept", "2"]) == 2
+    assert "--accept '2': expected a probability in 0..1" in capsys.readouterr().err

@@ -47,7 +47,8 @@ middle one).
 (:mod:`~kinegym.vision.grid_choice`), made in that order, each with its cells read; a
 trained :class:`~kinegym.vision.grid_choice.GridArbiter` gives each the probability that it
 reads the board right. The first that reaches its accept level is taken, else the most
-probable made (on rendered and lab boards the straight field is taken at once).
+probable made (on rendered and lab boards the straight field is taken at once). A lower accept
+level (``BoardReader(accept=...)``) makes fewer hypotheses: faster, less often right.
 
 Rows are returned top to bottom and columns left to right *as the image shows them*
 (a board turned more than 45 degrees reads turned). :class:`ThresholdReader` keeps seed
@@ -83,7 +84,7 @@ from .grid_lines import (
     _segments,
     _union_length,
 )
-from .hash_cells import SearchCopy, _darkest_near, read_hash
+from .hash_cells import SearchCopy, line_contrast, read_hash
 from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_map, noise_sigma
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
@@ -108,11 +109,16 @@ class BoardReader:
             ``"alternate"`` (players take turns), ``"x-first"``, ``"o-first"`` or ``"any"`` (each
             cell's own most probable call); a reading that breaks the rule becomes the most
             probable board that keeps it (:func:`~kinegym.vision.counts.most_probable_board`).
+        accept: the arbiter probability at which a hypothesis is taken without making the rest, in
+            [0, 1]: lower reads faster and less often right (0: the first grid found; 1: every
+            hypothesis made; bench/README.md "Speed against boards" measures the trade), None the
+            arbiter's own level (``arbiter.accept``, chosen when it was trained).
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
                  grid_px: int = 400, model: CellModel | CellEnsemble | str | Sequence[str] | None = "shipped",
-                 arbiter: GridArbiter | str | None = "shipped", counts: str = "alternate") -> None:
+                 arbiter: GridArbiter | str | None = "shipped", counts: str = "alternate",
+                 accept: float | None = None) -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
@@ -131,6 +137,10 @@ class BoardReader:
         self.arbiter = arbiter
         count_rule(counts)  # an unknown rule is named here
         self.counts = counts
+        if accept is not None and not (isinstance(accept, (int, float)) and 0.0 <= accept <= 1.0):
+            raise VisionError(f"accept={accept!r}; expected a probability in [0, 1] (0: the first grid found, "
+                              "1: every hypothesis) or None (the arbiter's own level)")
+        self.accept = None if accept is None else float(accept)
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
@@ -141,9 +151,10 @@ class BoardReader:
         ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``), and
         ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise."""
         made, reasons = [], []
+        accept = self.accept if self.accept is not None or self.arbiter is None else self.arbiter.accept
         for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
-            if self.arbiter is None or hyp.p >= self.arbiter.accept:
+            if self.arbiter is None or hyp.p >= accept:
                 break
         if not made:
             if trace is not None:
@@ -219,7 +230,7 @@ class BoardReader:
         trace["_g"] = g
         Hg, err, npts, frame, n = self._find_grid(dg, math.hypot(*dg.shape), trace)
         H = np.array([[g, 0, 0.5 * (g - 1)], [0, g, 0.5 * (g - 1)], [0, 0, 1.0]]) @ Hg
-        line_ref, coverage = self._line_contrast(d, H, n)
+        line_ref, coverage = line_contrast(d, H, n)
         probs, feats, inputs = self._read_cells(d, H, n, line_ref)
         trace["cell_inputs"] = inputs
         return Hypothesis("straight", H, err * g, npts, frame, n, probs, feats, inputs, line_ref, coverage, 0.0, diag)
@@ -325,7 +336,7 @@ class BoardReader:
         if max(areas) > 3.0 * max(min(areas), 1e-9):
             raise NoBoardError(f"the lattice implies cells {max(areas) / max(min(areas), 1e-9):.1f} x larger "
                                "in one corner than in another; no camera tilts that much")
-        _, coverage = self._line_contrast(d, H, n)
+        _, coverage = line_contrast(d, H, n)
         if coverage < 0.6:
             raise NoBoardError(f"only {coverage:.0%} of the field's interior lines carry ink; not a grid")
         frame = (steps[0] == 0, steps[1] == 0, steps[2] == 0, steps[3] == 0)
@@ -557,24 +568,6 @@ class BoardReader:
         miss = ~hit[:, :-1] & ~hit[:, 1:]
         runs = np.where(miss.any(axis=1), t[miss.argmax(axis=1)] - 0.1, t[-1])
         return _median(runs)
-
-    def _line_contrast(self, d: np.ndarray, H: np.ndarray, n: int) -> tuple[float, float]:
-        """Median peak darkness along the interior grid lines (the contrast of real ink) and
-        the share of the lines' length that carries ink at all."""
-        t = np.linspace(0.15, n - 0.15, 6 * n)
-        pts = []
-        for i in range(1, n):
-            pts.append(np.stack([np.full_like(t, i), t], -1))
-            pts.append(np.stack([t, np.full_like(t, i)], -1))
-        px = np.rint(_apply(H, np.concatenate(pts))).astype(int)
-        hgt, wid = d.shape
-        ok = (px[:, 0] >= 0) & (px[:, 0] < wid) & (px[:, 1] >= 0) & (px[:, 1] < hgt)
-        if not ok.any():
-            return 0.5, 0.0
-        vals = _darkest_near(d, px[ok])
-        floor = 0.15
-        on = vals[vals > floor]
-        return (_median(on) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
 
     # -- cells -----------------------------------------------------------------------
     def _read_cells(self, d: np.ndarray, H: np.ndarray, n: int, line_ref: float, floor: float | None = None,

@@ -15,8 +15,9 @@ import cv2
 import numpy as np
 
 from .grid_choice import HUE_KINDS, PAGE_KINDS, SHARES, Hypothesis, same_lattice
+from .grid_lines import _median
 from .hand_grid import HashGrid, crossing_lattice, find_hash_grid, search_copy
-from .ink import ink_colour, ink_map
+from .ink import _apply, ink_colour, ink_map
 from .page import page_apart
 from .polylines import extend
 from .ruling import Ruling, clear_rules
@@ -24,8 +25,8 @@ from .ruling import Ruling, clear_rules
 if TYPE_CHECKING:
     from .board_reader import BoardReader
 
-__all__ = ["SearchCopy", "read_hash", "erase_mask", "perspective_ratio", "affine_lattice", "FLICK_CELLS",
-           "MAX_PERSPECTIVE"]
+__all__ = ["SearchCopy", "read_hash", "line_contrast", "erase_mask", "perspective_ratio", "affine_lattice",
+           "FLICK_CELLS", "MAX_PERSPECTIVE"]
 
 #: The most a flick at a '#' line's tip spans (cells, its box's longer side) that
 #: :func:`erase_mask` takes for the line's. Uncapped, a piece in which graph paper's rules
@@ -50,6 +51,26 @@ def _darkest_near(d: np.ndarray, px: np.ndarray) -> np.ndarray:
     ys = np.clip(px[:, 1, None, None] + off[None, :, None], 0, h - 1)
     xs = np.clip(px[:, 0, None, None] + off[None, None, :], 0, w - 1)
     return d[ys, xs].max(axis=(1, 2))
+
+
+def line_contrast(d: np.ndarray, H: np.ndarray, n: int) -> tuple[float, float]:
+    """Median peak darkness along the interior grid lines of the ``n`` x ``n`` field ``H`` (cells to
+    px of the ink map ``d``): the contrast of real ink; and the share of the lines' length that
+    carries ink at all."""
+    t = np.linspace(0.15, n - 0.15, 6 * n)
+    pts = []
+    for i in range(1, n):
+        pts.append(np.stack([np.full_like(t, i), t], -1))
+        pts.append(np.stack([t, np.full_like(t, i)], -1))
+    px = np.rint(_apply(H, np.concatenate(pts))).astype(int)
+    hgt, wid = d.shape
+    ok = (px[:, 0] >= 0) & (px[:, 0] < wid) & (px[:, 1] >= 0) & (px[:, 1] < hgt)
+    if not ok.any():
+        return 0.5, 0.0
+    vals = _darkest_near(d, px[ok])
+    floor = 0.15
+    on = vals[vals > floor]
+    return (_median(on) if len(on) else floor), float(np.mean(vals > floor)) * float(ok.mean())
 
 
 @dataclass
@@ -129,7 +150,7 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
     probs, feats, inputs = reader._read_cells(clean, H, grid.n, line_ref, floor=floor, margin_cells=1.0, outer=0.9)
     trace["cell_inputs"] = inputs
     npts = int(grid.crossings.shape[0] * grid.crossings.shape[1])
-    coverage = reader._line_contrast(d, H, grid.n)[1]
+    coverage = line_contrast(d, H, grid.n)[1]
     return Hypothesis("hash", H, grid.error_px * fx, npts, (False, False, False, False), grid.n, probs, feats,
                       inputs, line_ref, coverage, grid.score / (grid.n - 1) ** 2, math.hypot(h, w),
                       lattice=None if H is found else found)

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit
+from kinegym.cli.common import EXIT_NO_ANSWER, EXIT_OK, UsageError, add_json, emit, parse_floats
 from kinegym.vision.counts import COUNT_RULES  # numpy only: the parser names the rules
 
 __all__ = ["add_parsers", "cmd_solve", "cmd_match", "cmd_read_board"]
@@ -99,9 +99,13 @@ def cmd_read_board(args: argparse.Namespace) -> int:
     from kinegym.vision.image_io import read_image
     from kinegym.vision.reading import UNSURE_GRID
 
+    accept = None if args.accept is None else parse_floats(args.accept, 1, "--accept")[0]
+    if accept is not None and not 0.0 <= accept <= 1.0:
+        raise UsageError(f"--accept {args.accept!r}: expected a probability in 0..1 (0: the first grid found, "
+                         "1: every grid hypothesis)")
     path = Path(args.image)
     rgb = read_image(path)
-    reader = BoardReader(size=args.size, counts=args.counts)
+    reader = BoardReader(size=args.size, counts=args.counts, accept=accept)
     trace: dict[str, object] = {}
     t0 = time.perf_counter()
     try:
@@ -175,6 +179,9 @@ def add_parsers(sub: Any) -> None:
     rb.add_argument("--counts", choices=tuple(COUNT_RULES), default="alternate",
                     help="X and O counts the board may have: players took turns (default), X or O began, or any "
                          "(each cell's own most probable call)")
+    rb.add_argument("--accept", default=None, metavar="P",
+                    help="take the first grid hypothesis at least this probable, 0..1: lower reads faster and less "
+                         "often right (default: the shipped arbiter's level, 0.94)")
     rb.add_argument("--debug", default=None, help="write a PNG showing the found grid and each cell's call")
     add_json(rb)
     rb.set_defaults(func=cmd_read_board)
