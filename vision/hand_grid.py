@@ -185,28 +185,26 @@ def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
     thr = 0.5 * full
     local_max = cv2.dilate(prof, np.ones((1, ww), np.uint8))
     peaks = (prof >= thr) & (prof >= local_max)
+    peaks[:, 1:] &= ~peaks[:, :-1]  # one peak per plateau: its first px
     tol0 = max(3.0, 0.4 * hb)
     active: list[dict] = []
     done: list[dict] = []
     for k in range(nb):
         xs = np.flatnonzero(peaks[k])
-        if len(xs) > 1:  # one peak per plateau
-            keep = np.concatenate([[True], np.diff(xs) > 1])
-            xs = xs[keep]
-        vals = prof[k, xs]
-        taken = np.zeros(len(xs), bool)
-        # extend active tracks, nearest prediction first
-        cand = []
-        for ti, tr in enumerate(active):
-            gap = k - tr["k"][-1]
-            pred = tr["x"][-1] + tr["slope"] * gap
-            for pi, x in enumerate(xs):
-                dist = abs(x - pred)
-                if dist <= tol0 * gap:
-                    cand.append((dist, ti, pi))
-        cand.sort()
+        vals = prof[k, xs].tolist()
+        taken = [False] * len(xs)
+        # extend active tracks, nearest prediction first (ties: the older track, then the left peak)
+        if active and len(xs):
+            gap = k - np.array([tr["k"][-1] for tr in active])
+            pred = np.array([tr["x"][-1] for tr in active]) + np.array([tr["slope"] for tr in active]) * gap
+            dist = np.abs(xs[None, :] - pred[:, None])
+            ti, pi = np.nonzero(dist <= (tol0 * gap)[:, None])
+            order = np.lexsort((pi, ti, dist[ti, pi]))
+            cand = zip(ti[order].tolist(), pi[order].tolist())
+        else:
+            cand = iter(())
         used_t: set[int] = set()
-        for _dist, ti, pi in cand:
+        for ti, pi in cand:
             if ti in used_t or taken[pi]:
                 continue
             tr = active[ti]
@@ -215,13 +213,14 @@ def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
             tr["slope"] = new_slope if len(tr["k"]) == 1 else 0.5 * (tr["slope"] + new_slope)
             tr["k"].append(k)
             tr["x"].append(float(xs[pi]))
-            tr["v"].append(float(vals[pi]))
+            tr["v"].append(vals[pi])
             tr["d"].append(float(dprof[k, xs[pi]]))
             used_t.add(ti)
             taken[pi] = True
-        for pi in np.flatnonzero(~taken):
-            active.append({"k": [k], "x": [float(xs[pi])], "v": [float(vals[pi])], "d": [float(dprof[k, xs[pi]])],
-                           "slope": 0.0})
+        for pi, t in enumerate(taken):
+            if not t:
+                active.append({"k": [k], "x": [float(xs[pi])], "v": [vals[pi]], "d": [float(dprof[k, xs[pi]])],
+                               "slope": 0.0})
         still = []
         for tr in active:
             (still if k - tr["k"][-1] <= 2 else done).append(tr)
@@ -230,16 +229,14 @@ def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
     Minv = cv2.invertAffineTransform(M)
     out = []
     for tr in done:
-        if len(tr["k"]) < 3:
-            continue
-        q = np.stack([np.array(tr["x"]), (np.array(tr["k"]) + 0.5) * hb], axis=1)
-        q = _follow_ends(rot, q, width, hb)
-        pts = q @ Minv[:, :2].T + Minv[:, 2]
         # strength: peak ink per band, times the share of the spanned bands that show ink (a
         # chain of marks in a row links into a track too, with gaps between the marks)
         cover = len(tr["k"]) / (tr["k"][-1] - tr["k"][0] + 1)
-        if cover < 0.6:
+        if len(tr["k"]) < 3 or cover < 0.6:
             continue
+        q = np.array([tr["x"], [(kk + 0.5) * hb for kk in tr["k"]]]).T
+        q = _follow_ends(rot, q, width, hb)
+        pts = q @ Minv[:, :2].T + Minv[:, 2]
         out.append(Track(pts, min(1.0, float(np.mean(tr["v"])) / full) * cover, len(tr["k"]),
                          ink=float(np.mean(tr["d"])) / hb))
     return out, M, rot
