@@ -64,11 +64,13 @@ def test_first_crossing_matches_every_pair_tried(seed: int) -> None:
     if seed % 5 == 0:  # a crossing exactly at a vertex
         b[m // 2] = a[n // 2]
     got, want = polylines.first_crossing(a, b), _first_crossing(a, b)
-    assert (got is None) == (want is None)
+    prepared = polylines.first_crossing(polylines.prepare(a), polylines.prepare(b))  # as the '#' search crosses them
+    assert (got is None) == (want is None) == (prepared is None)
     if seed in (1, 2, 3):  # the draws these seeds make do cross: the test compares crossings, not only misses
         assert want is not None
     if want is not None:
         assert np.array_equal(got[0], want[0]) and got[1:] == want[1:]
+        assert np.array_equal(prepared[0], want[0]) and prepared[1:] == want[1:]
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -50,7 +50,7 @@ import numpy as np
 from .errors import NoBoardError
 from .grid_lines import _median
 from .ink import colour_at, ink_mask, median_at, unit
-from .polylines import extend, first_crossing, resample
+from .polylines import extend, first_crossing, prepare, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
@@ -288,7 +288,8 @@ def _sharing(tracks: list[Track], width: float) -> np.ndarray:
         if np.any(lo[i] > hi[j]) or np.any(lo[j] > hi[i]):
             continue  # no point of one is near the other's box, let alone the other
         a, b = (pts[i], pts[j]) if len(pts[i]) <= len(pts[j]) else (pts[j], pts[i])
-        dist = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+        dx, dy = a[:, 0, None] - b[None, :, 0], a[:, 1, None] - b[None, :, 1]
+        dist = np.sqrt((dx * dx + dy * dy).min(axis=1))  # (the root of the least square: the least distance)
         out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
     return out
 
@@ -298,10 +299,10 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
     """The best choice of ``k`` tracks per family forming a '#': (score, chosen a, chosen b,
     crossings ``(k, k, 2)``)."""
     h, w = shape
-    ea = [extend(t.pts, ext) for t in fa]
-    eb = [extend(t.pts, ext) for t in fb]
-    la = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in ea]
-    lb = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in eb]
+    ea = [prepare(extend(t.pts, ext)) for t in fa]  # each line crosses up to 7 others
+    eb = [prepare(extend(t.pts, ext)) for t in fb]
+    la = [float(np.hypot(*p.seg.T).sum()) for p in ea]
+    lb = [float(np.hypot(*p.seg.T).sum()) for p in eb]
     cross: dict[tuple[int, int], tuple[np.ndarray, float, float] | None] = {}
 
     def X(i: int, j: int) -> tuple[np.ndarray, float, float] | None:

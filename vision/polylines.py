@@ -6,9 +6,11 @@ polylines (a hand-drawn line is wavy, so it is followed, not fitted with one str
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["extend", "first_crossing", "resample"]
+__all__ = ["extend", "first_crossing", "prepare", "Prepared", "resample"]
 
 
 def extend(p: np.ndarray, by: float) -> np.ndarray:
@@ -20,19 +22,41 @@ def extend(p: np.ndarray, by: float) -> np.ndarray:
     return np.concatenate([[p[0] + by * d0], p, [p[-1] + by * d1]])
 
 
-def first_crossing(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, float] | None:
-    """First crossing of polylines ``a`` and ``b``: the point and its arc positions along each."""
-    p, r = a[:-1], a[1:] - a[:-1]
-    q, s = b[:-1], b[1:] - b[:-1]
+@dataclass(frozen=True)
+class Prepared:
+    """A polyline with what :func:`first_crossing` needs of it, worked out once (a line crossed
+    with many others): its points, segments, the segments' boxes (``lo_a``/``hi_a`` a hair
+    wider, for the polyline's role as ``a``) and the arc length at each point."""
+
+    pts: np.ndarray
+    seg: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    lo_a: np.ndarray
+    hi_a: np.ndarray
+    arc: np.ndarray
+
+
+def prepare(p: np.ndarray) -> Prepared:
+    """:class:`Prepared` for polyline ``p`` ``(N, 2)``."""
+    seg = p[1:] - p[:-1]
+    lo, hi = np.minimum(p[:-1], p[1:]), np.maximum(p[:-1], p[1:])
+    return Prepared(p, seg, lo, hi, lo - 1e-6, hi + 1e-6, np.concatenate([[0.0], np.cumsum(np.hypot(*seg.T))]))
+
+
+def first_crossing(a: np.ndarray | Prepared, b: np.ndarray | Prepared) -> tuple[np.ndarray, float, float] | None:
+    """First crossing of polylines ``a`` and ``b`` (points, or :func:`prepare`'d): the point and
+    its arc positions along each."""
+    A = a if isinstance(a, Prepared) else prepare(a)
+    B = b if isinstance(b, Prepared) else prepare(b)
     # only segment pairs whose boxes meet can cross (a hair wider than exact: no rounding
     # could make a pair the boxes rule out cross); the pairs kept stay in row-major order
-    lo_a, hi_a = np.minimum(a[:-1], a[1:]) - 1e-6, np.maximum(a[:-1], a[1:]) + 1e-6
-    lo_b, hi_b = np.minimum(b[:-1], b[1:]), np.maximum(b[:-1], b[1:])
+    lo_a, hi_a, lo_b, hi_b = A.lo_a, A.hi_a, B.lo, B.hi
     ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
                         & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
-    rr, ss = r[ii], s[jj]
+    rr, ss = A.seg[ii], B.seg[jj]
     rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
-    qp = q[jj] - p[ii]
+    qp = B.pts[jj] - A.pts[ii]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
         u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
@@ -41,10 +65,8 @@ def first_crossing(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float, flo
         return None
     k = ok[0]
     i, j = ii[k], jj[k]
-    la = np.concatenate([[0.0], np.cumsum(np.hypot(*r.T))])
-    lb = np.concatenate([[0.0], np.cumsum(np.hypot(*s.T))])
-    pt = p[i] + t[k] * r[i]
-    return pt, float(la[i] + t[k] * np.hypot(*r[i])), float(lb[j] + u[k] * np.hypot(*s[j]))
+    r, s = A.seg[i], B.seg[j]
+    return A.pts[i] + t[k] * r, float(A.arc[i] + t[k] * np.hypot(*r)), float(B.arc[j] + u[k] * np.hypot(*s))
 
 
 def resample(p: np.ndarray, step: float) -> np.ndarray:
