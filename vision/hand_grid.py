@@ -124,7 +124,8 @@ def _directions(mask: np.ndarray, width: float) -> list[tuple[float, float]]:
     long strokes dominate), the second at least 40 deg from the first. A rival second peak, at
     least :data:`_RIVAL` as high above the median (converging or bent lines spread their peak,
     X's line up their strokes), makes a second pair: the '#' scores decide."""
-    ys, xs = np.nonzero(mask)
+    ink = cv2.findNonZero(mask)  # (np.nonzero's row-major order, in a third of its time)
+    xs, ys = (ink[:, 0, 0], ink[:, 0, 1]) if ink is not None else (np.zeros(0, np.int32), np.zeros(0, np.int32))
     if len(xs) > 12000:  # a fixed subsample: the energy's shape needs no more
         pick = np.linspace(0, len(xs) - 1, 12000).astype(np.intp)
         xs, ys = xs[pick], ys[pick]
