@@ -262,8 +262,7 @@ def _follow_ends(rot: np.ndarray, q: np.ndarray, width: float, hb: int) -> np.nd
         xc = np.rint(end[0] + slope * (rows - end[1])).astype(np.intp)
         cols = xc[:, None] + np.arange(-r, r + 1)[None, :]
         inside = (cols >= 0) & (cols < wr)
-        hit = np.zeros(cols.shape, bool)
-        hit[inside] = rot[np.broadcast_to(ri[:, None], cols.shape)[inside], cols[inside]] > 0
+        hit = (rot[ri[:, None], np.clip(cols, 0, wr - 1)] > 0) & inside
         ink = hit.any(axis=1)
         miss = ~ink
         gap = miss[:-2] & miss[1:-1] | miss[1:-1] & miss[2:] if len(miss) > 2 else miss
@@ -579,12 +578,11 @@ def _dense(tr: Track, width: float) -> np.ndarray:
     cols = np.rint(pred).astype(np.intp)[:, None] + off[None, :]
     ri = np.clip(np.rint(rows).astype(np.intp), 0, hr - 1)
     inside = (cols >= 0) & (cols < wr)
-    hit = np.zeros(cols.shape, bool)
-    hit[inside] = rot[np.broadcast_to(ri[:, None], cols.shape)[inside], cols[inside]] > 0
+    hit = (rot[ri[:, None], np.clip(cols, 0, wr - 1)] > 0) & inside
     near = np.where(hit, np.abs(off)[None, :], 10 ** 6).argmin(axis=1)
     x = np.where(hit.any(axis=1), np.rint(pred) + off[near], pred)
-    if len(x) >= 5:  # a run of 5 rows' median: a single stray pixel does not pull the trace
-        x = np.median(np.lib.stride_tricks.sliding_window_view(np.pad(x, 2, mode="edge"), 5), axis=1)
+    if len(x) >= 5:  # a run of 5 rows' median (the middle of the 5 sorted): a stray pixel does not pull the trace
+        x = np.sort(np.lib.stride_tricks.sliding_window_view(np.pad(x, 2, mode="edge"), 5), axis=1)[:, 2]
     Minv = cv2.invertAffineTransform(M)
     return np.stack([x, rows], axis=1) @ Minv[:, :2].T + Minv[:, 2]
 
