@@ -151,10 +151,10 @@ class BoardReader:
         ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``), and
         ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise."""
         made, reasons = [], []
-        accept = self.accept if self.accept is not None or self.arbiter is None else self.arbiter.accept
+        accept = self.accept if self.accept is not None else self.arbiter.accept if self.arbiter is not None else 0.0
         for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
-            if self.arbiter is None or hyp.p >= accept:
+            if hyp.p >= accept:  # (without an arbiter every p is 1: the first grid found)
                 break
         if not made:
             if trace is not None:
