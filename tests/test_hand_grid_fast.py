@@ -113,3 +113,17 @@ def test_search_copy_takes_whole_factors_from_the_photo(h: int, w: int, k: int) 
     else:
         assert got.shape == (360, 480, 3)
         assert np.array_equal(got, hand_grid.search_copy(working))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_an_ink_mask_from_levels_measured_once_is_the_mask_measured_again(seed: int) -> None:
+    """The reader measures a search copy's noise floor and strong ink once for every kind's search
+    (``SearchCopy.levels``); each mask must be the one measuring them again would give."""
+    rng = np.random.default_rng(seed)
+    d = (rng.random((120, 160)) ** 3).astype(np.float32)
+    d[40:44, 10:150] = 0.8  # a stroke: strong ink above the noise
+    levels = ink.noise_floor_and_top(d)
+    for share in (0.0, 0.22, 0.45):
+        for local in (False, True):
+            again, once = ink.ink_mask(d, share, 0.05, local), ink.ink_mask(d, share, 0.05, local, levels)
+            assert np.array_equal(again[0], once[0]) and np.array_equal(again[1], once[1]) and again[2] == once[2]

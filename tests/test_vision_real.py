@@ -154,7 +154,8 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
     # of the kinds sought in the whole photo only the '#' above its noise is made (the arbiter, not sure of
     # it, may seek the '#' on the page alone too)
     assert [k for k, _ in trace["hypotheses"] if "page" not in k] == ["hash 0%"]  # type: ignore[union-attr]
-    monkeypatch.setattr(ink, "local_ink_threshold", lambda d, share: np.full(d.shape, ink_threshold(d, share)))
+    monkeypatch.setattr(ink, "local_ink_threshold",
+                        lambda d, share, levels=None: np.full(d.shape, ink_threshold(d, share, levels)))
     monkeypatch.setattr(board_reader, "PAGE_KINDS", ())  # (the '#' sought on the page alone finds it too)
     with pytest.raises(NoBoardError):
         BoardReader(size=3).read(sc.image)

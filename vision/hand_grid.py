@@ -49,7 +49,7 @@ import numpy as np
 
 from .errors import NoBoardError
 from .grid_lines import _median
-from .ink import colour_at, ink_mask, median_at, unit
+from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
 from .polylines import extend, first_crossing, prepare, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 
@@ -386,7 +386,8 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
 
 def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.ndarray | None = None,
                    share: float | None = None, other_colour: bool = False,
-                   rulings: dict[tuple[float, bool], list[Ruling]] | None = None) -> HashGrid:
+                   rulings: dict[tuple[float, bool], list[Ruling]] | None = None,
+                   levels: tuple[float, float] | None = None) -> HashGrid:
     """The best hand-drawn '#' grid in a darkness map (see the module docstring); raises
     :class:`NoBoardError` when no two families of crossing strokes form one. The ink mask's
     threshold is ``share`` of the strongest ink (:func:`~kinegym.vision.ink.ink_mask`); by default
@@ -398,14 +399,17 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
     ``other_colour``: on ruled paper whose rules have a colour of their own, the '#' only in the ink
     not of that colour, however pale (no darker-than-the-rules gate); elsewhere nothing is found.
     ``rulings``: a memo for one map - each ink level's search records the rulings it found there, and
-    an ``other_colour`` search at a level recorded starts from them instead of tracing that level again."""
+    an ``other_colour`` search at a level recorded starts from them instead of tracing that level again.
+    ``levels``: the map's :func:`~kinegym.vision.ink.noise_floor_and_top`, where already measured."""
     if share is not None and not 0.0 <= share < 1.0:
         raise ValueError(f"share={share!r}; expected a share of the strongest ink in [0, 1)")
+    levels = levels or noise_floor_and_top(d)  # (every level's search measures the one map)
     tries = [(0.22, False), (0.0, False)] if share is None else [(float(share), False)]
     first: NoBoardError | None = None
     for level, local in tries + ([(0.0, True)] if tries[-1][0] == 0.0 else []):
         try:
-            return _find_hash_grid(d, sizes, level, colour, local=local, other_colour=other_colour, rulings=rulings)
+            return _find_hash_grid(d, sizes, level, colour, local=local, other_colour=other_colour, rulings=rulings,
+                                   levels=levels)
         except NoBoardError as exc:
             first = first or exc
     raise first  # type: ignore[misc]
@@ -413,15 +417,15 @@ def find_hash_grid(d: np.ndarray, sizes: tuple[int, ...] = (3, 5), colour: np.nd
 
 def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.ndarray | None,
                     above: float = 0.0, ruling: Ruling | None = None, local: bool = False,
-                    other_colour: bool = False, rulings: dict[tuple[float, bool], list[Ruling]] | None = None
-                    ) -> HashGrid:
+                    other_colour: bool = False, rulings: dict[tuple[float, bool], list[Ruling]] | None = None,
+                    levels: tuple[float, float] | None = None) -> HashGrid:
     """:func:`find_hash_grid` at one ink level; ``ruling`` (with ``above``, the rules' darkness
     times 1.6, or 0) marks the search on ruled paper's own terms, inside the search that found it."""
     level = (share, local)
     if other_colour and rulings is not None and level in rulings:  # this level's rulings, already found
         return _best([_try(_in_other_colour, d, sizes, share, colour, own) for own in rulings[level]]
                      or [NoBoardError(NO_HUED_RULING)])
-    mask, t, width = ink_mask(d, share, above, local)
+    mask, t, width = ink_mask(d, share, above, local, levels)
     if ruling is not None and ruling.by_colour and colour is not None:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:

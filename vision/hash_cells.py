@@ -17,7 +17,7 @@ import numpy as np
 from .grid_choice import HUE_KINDS, PAGE_KINDS, SHARES, Hypothesis, same_lattice
 from .grid_lines import _median
 from .hand_grid import HashGrid, crossing_lattice, find_hash_grid, search_copy
-from .ink import _apply, ink_colour, ink_map
+from .ink import _apply, ink_colour, ink_map, noise_floor_and_top
 from .page import page_apart
 from .polylines import extend
 from .ruling import Ruling, clear_rules
@@ -97,6 +97,12 @@ class SearchCopy:
     def page(self) -> np.ndarray | None:
         return page_apart(self.rgb)
 
+    @cached_property
+    def levels(self) -> tuple[float, float]:
+        """The ink map's noise floor and strong ink (:func:`~kinegym.vision.ink.noise_floor_and_top`),
+        measured once for every kind's search."""
+        return noise_floor_and_top(self.d)
+
 
 def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[str, object],
               hashed: SearchCopy, kind: str, made: Sequence[Hypothesis] = ()) -> Hypothesis | None:
@@ -119,8 +125,9 @@ def read_hash(reader: BoardReader, rgb: np.ndarray, d: np.ndarray, trace: dict[s
             return None
         dg = np.where(hashed.page > 0, dg, np.float32(0.0))
     sizes = (reader.size,) if reader.size is not None else (3, 5)
+    page = kind in PAGE_KINDS  # (the page's map is another: its own rulings and levels)
     grid = find_hash_grid(dg, sizes, colour, share=SHARES[kind], other_colour=kind in HUE_KINDS,
-                          rulings=None if kind in PAGE_KINDS else hashed.rulings)  # (the page's map is another)
+                          rulings=None if page else hashed.rulings, levels=None if page else hashed.levels)
     hashed.ruled |= grid.rules is not None
     fx, fy = w / dg.shape[1], h / dg.shape[0]
     to_d = np.array([[fx, 0, 0.5 * (fx - 1)], [0, fy, 0.5 * (fy - 1)], [0, 0, 1.0]])

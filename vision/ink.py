@@ -11,8 +11,8 @@ import numpy as np
 
 from .errors import VisionError
 
-__all__ = ["ink_map", "ink_colour", "ink_threshold", "local_ink_threshold", "ink_mask", "median_at", "colour_at",
-           "angle_deg", "unit", "noise_sigma", "denoised", "NOISY_SIGMA"]
+__all__ = ["ink_map", "ink_colour", "ink_threshold", "noise_floor_and_top", "local_ink_threshold", "ink_mask",
+           "median_at", "colour_at", "angle_deg", "unit", "noise_sigma", "denoised", "NOISY_SIGMA"]
 
 
 def _apply(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -102,19 +102,20 @@ def denoised(image: object, sigma: float) -> np.ndarray:
 NOISE_FLOOR_CAP = 0.5
 
 
-def ink_threshold(d: np.ndarray, share: float = 0.22) -> float:
+def ink_threshold(d: np.ndarray, share: float = 0.22, levels: tuple[float, float] | None = None) -> float:
     """The level above which a darkness map's pixel is ink: the larger of its noise (median +
     6 robust sigmas, but at most :data:`NOISE_FLOOR_CAP` of the strong ink), ``share`` of its
     strong ink (99.7th percentile) and 0.035. The cap: dense graph rules in a small photo, or
     heavy sensor noise, spread the map's middle so far that six robust sigmas rose above the
     drawn lines themselves (real-like photo 20,109: floor 0.56, its '#' about 0.45, its darkest
-    strokes 0.64); ink half as dark as the darkest strokes is ink, whatever lies around it."""
-    return _level(*_noise_floor_and_top(d), share)
+    strokes 0.64); ink half as dark as the darkest strokes is ink, whatever lies around it.
+    ``levels``: the map's :func:`noise_floor_and_top`, where already measured."""
+    return _level(*(levels or noise_floor_and_top(d)), share)
 
 
-def _noise_floor_and_top(d: np.ndarray) -> tuple[float, float]:
+def noise_floor_and_top(d: np.ndarray) -> tuple[float, float]:
     """A darkness map's noise floor (median + 6 robust sigmas) and strong ink (99.7th percentile),
-    from every other pixel each way."""
+    from every other pixel each way (three selections: measure once per map, pass as ``levels``)."""
     sample = d[::2, ::2].ravel()
     med = float(np.median(sample))
     mad = float(np.median(np.abs(sample - med))) * 1.4826
@@ -130,15 +131,16 @@ def _level(floor: float, top: float, share: float) -> float:
 NOISE_BLOCK_PX = 32
 
 
-def local_ink_threshold(d: np.ndarray, share: float = 0.22) -> np.ndarray:
+def local_ink_threshold(d: np.ndarray, share: float = 0.22, levels: tuple[float, float] | None = None
+                        ) -> np.ndarray:
     """:func:`ink_threshold` per pixel ``(H, W)`` float32, with the noise floor measured locally
     where that is lower: each :data:`NOISE_BLOCK_PX` block's own median + 6 robust sigmas,
     interpolated between block centres. A textured table, a cloth or a wood grain around the
     page spreads the whole map's darkness and raised the one floor above pencil and faint-pen
     lines on the plain page (real-like photos 30,011, 30,077, 30,085 and 30,097 were refused so,
     their '#' plain to see); the page's own floor lets them in, and the floor is never raised
-    above the whole map's (so no ink it kept is lost)."""
-    floor, top = _noise_floor_and_top(d)
+    above the whole map's (so no ink it kept is lost). ``levels`` as for :func:`ink_threshold`."""
+    floor, top = levels or noise_floor_and_top(d)
     t = _level(floor, top, share)
     sample = d[::2, ::2]
     h, w = sample.shape
@@ -185,16 +187,17 @@ def angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(math.acos(float(np.clip(np.dot(a, b), -1.0, 1.0))))
 
 
-def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0, local: bool = False
-             ) -> tuple[np.ndarray, float | np.ndarray, float]:
+def ink_mask(d: np.ndarray, share: float = 0.22, above: float = 0.0, local: bool = False,
+             levels: tuple[float, float] | None = None) -> tuple[np.ndarray, float | np.ndarray, float]:
     """The ink mask of a darkness map (uint8 0/1), its threshold and the stroke width (px).
 
     The threshold is the larger of the map's noise level (median + 6 robust sigmas; with ``local``
     each region's own where that is lower, :func:`local_ink_threshold`, and the threshold is a map),
     ``share`` of its strong ink (the 99.7th percentile) and ``above``; a pixel joins the mask also
     at 60 % of that level when it touches a pixel above it (hysteresis: a faint stretch of a line
-    stays connected)."""
-    t = np.maximum(local_ink_threshold(d, share), np.float32(above)) if local else max(ink_threshold(d, share), above)
+    stays connected). ``levels``: the map's :func:`noise_floor_and_top`, where already measured."""
+    t = (np.maximum(local_ink_threshold(d, share, levels), np.float32(above)) if local
+         else max(ink_threshold(d, share, levels), above))
     hi = (d > t).astype(np.uint8)
     lo = (d > 0.6 * t).astype(np.uint8)
     # hysteresis: low pixels within a pixel of high ones
