@@ -316,7 +316,7 @@ def recalibrate(model: CellModel, data: CellData, rule_weight: float, seeds: tup
     return record
 
 
-def train(real_like: int = 3000, hard: int = 600, held_out: float = 0.2, workers: int = 2, hidden: int = 128,
+def train(real_like: int = 6000, hard: int = 1000, held_out: float = 0.2, workers: int = 2, hidden: int = 128,
           epochs: int = 15, decay: float = 1e-3, rule_weight: float = RULE_WEIGHT, seed: int = 0, progress: bool = True,
           cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS, all_grids: bool = False
           ) -> tuple[CellModel, dict[str, object]]:
@@ -353,8 +353,8 @@ def train(real_like: int = 3000, hard: int = 600, held_out: float = 0.2, workers
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m kinegym.agents.train_cells", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--real-like", type=int, default=3000, help="real-like photos (default 3000)")
-    ap.add_argument("--hard", type=int, default=600, help="hard rendered photos (default 600)")
+    ap.add_argument("--real-like", type=int, default=6000, help="real-like photos (default 6000)")
+    ap.add_argument("--hard", type=int, default=1000, help="hard rendered photos (default 1000)")
     ap.add_argument("--convs", default=",".join(map(str, CONVS)),
                     help=f"channels of the three convolutions (default {','.join(map(str, CONVS))})")
     ap.add_argument("--hidden", type=int, default=128, help="hidden units (default 128)")

@@ -19,7 +19,7 @@ PAGES = [ROOT / "README.md", ROOT / "bench" / "README.md", ROOT / "kinegym" / "d
 #: shell examples not run here, and why (each runs elsewhere or needs what a test has not)
 NOT_RUN = {
     "python -m kinegym.zoo": "RL Zoo trains and plays in tests/test_zoo.py, with fewer steps",
-    "python -m kinegym.agents.train_cells": "23 min; tests/test_cell_model.py trains through the same entry point "
+    "python -m kinegym.agents.train_cells": "31 min; tests/test_cell_model.py trains through the same entry point "
                                             "on 14 photos",
     "python -m kinegym.agents.train_grid_arbiter": "25 min; tests/test_grid_choice.py trains through the same entry "
                                                    "point on 13 photos",

@@ -181,12 +181,15 @@ def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
 
 def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
     """Real-like photo 30,052: thick blue lines and pale grey marks. The straight field is found and
-    read with its fixed ink floors (two pale marks missed, p 0.22); the '#' search finds the same
-    lattice, and reading it the '#' way (the photo's own ink level, larger outer cells) reads the
-    board. It used to be passed over as a grid already made."""
+    read with its fixed ink floors (a pale mark missed); the '#' search finds the same lattice, and
+    reading it the '#' way (the photo's own ink level, larger outer cells) reads the board. It used
+    to be passed over as a grid already made. Since stop 65's networks the arbiter gives the straight
+    field's reading p 0.921 (0.42 before), just over its accept level 0.92, so the default reader
+    stops there - one of the 8 boards of 1,000 the new networks lose (bench/README.md) - and the
+    '#' reading is asked for by making every hypothesis (accept 1)."""
     sc = real_like_scene(30_052)
     trace: dict[str, object] = {}
-    assert BoardReader(size=3).read(sc.image, trace).text() == sc.text() == "XXO|XOO|OX."
+    assert BoardReader(size=3, accept=1.0).read(sc.image, trace).text() == sc.text() == "XXO|XOO|OX."
     kinds = [k for k, _ in trace["hypotheses"]]  # type: ignore[union-attr]
     assert kinds == ["straight", "hash 22%"]
     made = BoardReader(size=3).hypotheses(sc.image)
