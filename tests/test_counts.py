@@ -69,9 +69,9 @@ def test_bad_rules_and_tables_are_named() -> None:
 
 
 def test_the_reader_keeps_the_count() -> None:
-    """Real-like photo 30,085 (paper): a stray stroke at the top left is called X on its own (0.78
-    against 0.14 empty), two X beside no O; the most probable board with the counts of a game leaves
-    it empty. The trace and the debug picture (orange, starred) say which cell the rule called.
+    """Real-like photo 30,085 (paper): a pink highlighter scribble in the top-left cell is called X on
+    its own (0.78 against 0.14 empty), two X beside no O; the most probable board with the counts of a
+    game leaves it empty. The trace and the debug picture (orange, starred) say which cell the rule called.
     (Photo 30,100, its O called empty on its own until stop 65, is read right cell by cell since.)"""
     from kinegym.envs.sim.scenes_real import real_like_scene
     from kinegym.vision.debug import debug_image
