@@ -63,6 +63,8 @@ __all__ = ["CellData", "grid_is_right", "collect", "load_or_collect", "fit", "ex
            "recalibrate", "main"]
 
 REAL_LIKE_SEED, HARD_SEED = 1_000_000, 2_000_000
+#: the photos the shipped networks were trained on (stop 65; 3,000 + 600 before): the defaults
+REAL_LIKE_PHOTOS, HARD_PHOTOS = 6000, 1000
 #: the weight of the hand rule's log-probabilities at reading, a prior (stop 61: at 0.15, recalibrated and the
 #: arbiter retrained, 28 more of 1,000 real-like boards than at 0.3; at 0.1 as it was, 27 more but 3 of the real
 #: photos' condition readings fewer; bench/README.md, "The rule's weight halved")
@@ -316,9 +318,10 @@ def recalibrate(model: CellModel, data: CellData, rule_weight: float, seeds: tup
     return record
 
 
-def train(real_like: int = 6000, hard: int = 1000, held_out: float = 0.2, workers: int = 2, hidden: int = 128,
-          epochs: int = 15, decay: float = 1e-3, rule_weight: float = RULE_WEIGHT, seed: int = 0, progress: bool = True,
-          cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS, all_grids: bool = False
+def train(real_like: int = REAL_LIKE_PHOTOS, hard: int = HARD_PHOTOS, held_out: float = 0.2, workers: int = 2,
+          hidden: int = 128, epochs: int = 15, decay: float = 1e-3, rule_weight: float = RULE_WEIGHT, seed: int = 0,
+          progress: bool = True, cells: str | Path | None = None, convs: tuple[int, int, int] = CONVS,
+          all_grids: bool = False
           ) -> tuple[CellModel, dict[str, object]]:
     """Collect (or reuse ``cells``, see :func:`load_or_collect`; ``all_grids``: the cells of
     every right hypothesis), fit, calibrate (module docstring): the model and its report."""
@@ -353,8 +356,9 @@ def train(real_like: int = 6000, hard: int = 1000, held_out: float = 0.2, worker
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m kinegym.agents.train_cells", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--real-like", type=int, default=6000, help="real-like photos (default 6000)")
-    ap.add_argument("--hard", type=int, default=1000, help="hard rendered photos (default 1000)")
+    ap.add_argument("--real-like", type=int, default=REAL_LIKE_PHOTOS,
+                    help=f"real-like photos (default {REAL_LIKE_PHOTOS})")
+    ap.add_argument("--hard", type=int, default=HARD_PHOTOS, help=f"hard rendered photos (default {HARD_PHOTOS})")
     ap.add_argument("--convs", default=",".join(map(str, CONVS)),
                     help=f"channels of the three convolutions (default {','.join(map(str, CONVS))})")
     ap.add_argument("--hidden", type=int, default=128, help="hidden units (default 128)")
