@@ -49,6 +49,7 @@ import numpy as np
 
 from .errors import NoBoardError
 from .grid_lines import _median
+from .hash_search import best_hash
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
 from .polylines import extend, first_crossing, prepare, resample
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
@@ -518,9 +519,10 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
         raise NoBoardError(f"strokes in {len(fa)} and {len(fb)} lines of the two directions; a grid needs 2 + 2")
     ext = 0.06 * max(d.shape)
     found = []
-    for n in sizes:
+    share_a, share_b = _sharing(fa, width), _sharing(fb, width)
+    for n in sizes:  # (best_hash: _best_hash's fast kernel, the same result)
         if len(fa) >= n - 1 and len(fb) >= n - 1:
-            b = _best_hash(fa, fb, n - 1, d.shape, ext, width)
+            b = best_hash(fa, fb, n - 1, d.shape, ext, width, share_a, share_b)
             if b is not None:
                 found.append((b[0] / (2 * (n - 1)), n, b))
     if not found:

@@ -1,0 +1,134 @@
+"""The '#' search's fast kernel (:mod:`kinegym.vision.hash_search`) gives what the readable reference
+(``hand_grid._best_hash``) gives, to the last bit: the crossings of every pair of tracks, and the best
+choice of tracks with its score and crossings - on random wavy tracks, near-'#'s and not, and on the
+tracks the reader traces in real photos (upright, turned and shrunk)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from kinegym.vision import hand_grid, hash_search, polylines
+from kinegym.vision.board_reader import BoardReader
+from kinegym.vision.hand_grid import Track
+from kinegym.vision.image_io import read_image
+
+REAL = Path(__file__).parent / "data" / "real"
+
+
+def _same(a: tuple | None, b: tuple | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return a[0] == b[0] and a[1] == b[1] and a[2] == b[2] and np.array_equal(a[3], b[3])
+
+
+def _wavy(rng: np.random.Generator, start: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
+    return start + np.cumsum(step + rng.normal(0.0, 2.5, (n, 2)), axis=0)
+
+
+def _tracks(rng: np.random.Generator, vertical: bool, count: int, full: bool) -> list[Track]:
+    """Wavy strokes of one family across a 480 x 480 copy, spaced like a '#''s lines, some short
+    (every one long and the spacing regular when ``full``: 5 x 5 '#'s), one sometimes doubling
+    another (a stroke shared)."""
+    out = []
+    spacing = rng.uniform(60, 90 if full else 110)
+    for i in range(count):
+        n = int(rng.integers(14, 17) if full else rng.integers(4, 19))
+        across = 60 + spacing * i + rng.normal(0, 5 if full else 15)
+        along = rng.uniform(0, 20 if full else 70)
+        start, step = (np.array([across, along]), np.array([rng.normal(0, 2), 28.0])) if vertical else \
+            (np.array([along, across]), np.array([28.0, rng.normal(0, 2)]))
+        pts = _wavy(rng, start, step, n)
+        out.append(Track(pts, float(rng.uniform(0.3, 1.0)), n,
+                         colour=None if rng.random() < 0.5 else np.array([0.5, 0.5, 0.7]) + rng.normal(0, 0.1, 3)))
+    if count > 2 and rng.random() < 0.4:  # a stroke traced twice: the two share it
+        out.append(Track(out[0].pts + rng.normal(0, 1.0, out[0].pts.shape), 0.5, out[0].bands, colour=out[0].colour))
+    if any(t.colour is None for t in out):  # one family's colours are all known or none
+        for t in out:
+            t.colour = None
+    return out
+
+
+def _draw(seed: int) -> tuple[list[Track], list[Track]]:
+    """Seed ``seed``'s two families (a third of the seeds full 5 x 5 '#'s), their colours known for
+    both or neither."""
+    rng = np.random.default_rng(seed)
+    full = seed % 3 == 0
+    fa = _tracks(rng, True, int(rng.integers(4, 7) if full else rng.integers(2, 7)), full)
+    fb = _tracks(rng, False, int(rng.integers(4, 7) if full else rng.integers(2, 7)), full)
+    if (fa[0].colour is None) != (fb[0].colour is None):
+        for t in fa + fb:
+            t.colour = None
+    return fa, fb
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_every_crossing_at_once_is_each_pair_s_first_crossing(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    a = [_wavy(rng, np.array([rng.uniform(50, 400), 0.0]), np.array([0.0, 30.0]), int(rng.integers(2, 16)))
+         for _ in range(int(rng.integers(1, 7)))]
+    b = [_wavy(rng, np.array([0.0, rng.uniform(50, 400)]), np.array([30.0, 0.0]), int(rng.integers(2, 16)))
+         for _ in range(int(rng.integers(1, 7)))]
+    found, point, pos_a, pos_b = hash_search.all_crossings(a, b)
+    hits = 0
+    for i, p in enumerate(a):
+        for j, q in enumerate(b):
+            want = polylines.first_crossing(polylines.prepare(p), polylines.prepare(q))
+            assert found[i, j] == (want is not None)
+            if want is not None:
+                hits += 1
+                assert np.array_equal(point[i, j], want[0]) and (pos_a[i, j], pos_b[i, j]) == want[1:]
+    if seed < 5:
+        assert hits  # the draws cross: the test compares crossings, not only misses
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_best_hash_equals_the_reference_on_random_tracks(seed: int) -> None:
+    fa, fb = _draw(seed)
+    width, ext = 3.0, 0.06 * 480
+    share_a, share_b = hand_grid._sharing(fa, width), hand_grid._sharing(fb, width)
+    for k in (2, 4):
+        if len(fa) >= k and len(fb) >= k:
+            want = hand_grid._best_hash(fa, fb, k, (480, 480), ext, width)
+            assert _same(hash_search.best_hash(fa, fb, k, (480, 480), ext, width, share_a, share_b), want)
+
+
+def test_random_tracks_make_hashes_to_compare() -> None:
+    """The draws above are not all misses: most seeds' 3 x 3 search finds a '#', some 5 x 5 ones do,
+    and some find only choices with a line too short for its cells (the reference's -inf)."""
+    found, short = {2: 0, 4: 0}, 0
+    for seed in range(40):
+        fa, fb = _draw(seed)
+        for k in (2, 4):
+            if len(fa) >= k and len(fb) >= k:
+                best = hand_grid._best_hash(fa, fb, k, (480, 480), 0.06 * 480, 3.0)
+                found[k] += best is not None
+                short += best is not None and best[0] == -np.inf
+    assert found[2] >= 20 and found[4] >= 5 and short >= 2
+
+
+@pytest.mark.parametrize("name, turn", [("kvuletic2_image5.jpeg", 0), ("kvuletic2_image11.jpeg", 0),
+                                        ("kvuletic2_image13.jpeg", 30), ("kvuletic2_image7.jpeg", -15)])
+def test_best_hash_equals_the_reference_on_real_photos(name: str, turn: float,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    img = read_image(REAL / name)
+    if turn:
+        h, w = img.shape[:2]
+        img = cv2.warpAffine(img, cv2.getRotationMatrix2D((w / 2, h / 2), turn, 1.0), (w, h),
+                             borderMode=cv2.BORDER_REPLICATE)
+    calls: list[tuple[bool, bool]] = []  # (equal to the reference, a '#' found)
+    fast = hash_search.best_hash
+
+    def both(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float,
+             share_a: np.ndarray, share_b: np.ndarray) -> tuple | None:
+        got = fast(fa, fb, k, shape, ext, width, share_a, share_b)
+        calls.append((_same(got, hand_grid._best_hash(fa, fb, k, shape, ext, width)), got is not None))
+        return got
+
+    monkeypatch.setattr(hand_grid, "best_hash", both)
+    hyps = BoardReader(accept=1.0).hypotheses(img)  # every kind's search, 3 x 3 and 5 x 5
+    assert hyps and len(calls) >= 4
+    assert all(same for same, _ in calls) and sum(hit for _, hit in calls) >= 2

@@ -1,0 +1,163 @@
+"""The '#' search's fast kernel: :func:`best_hash` gives what
+:func:`~kinegym.vision.hand_grid._best_hash` (the readable reference) gives, bit for bit, with every
+choice of tracks scored at once in numpy instead of one by one in Python (a tenth of the time on a
+960 x 720 frame's 5 x 5 search: 35 x 35 choices of 4 tracks a family). ``tests/test_hash_search.py``
+holds the two equal on real photos' tracks and on random ones.
+
+Two steps, each the reference's own arithmetic in the same order (so the same floats):
+
+1. **Every crossing at once.** The segments of all tracks of one family against all of the other's,
+   boxes tested and crossings solved in one array; per pair of tracks the first crossing in the
+   reference's order (:func:`~kinegym.vision.polylines.first_crossing`: ``a``'s segments, then ``b``'s).
+2. **Every choice at once.** Each choice of ``k`` tracks per family is a row: its crossings ordered
+   across, the lattice's folds, cell sizes, arms and colours tested, and its score summed line by line
+   as the reference sums it. The first best row wins, as the reference's ``>`` keeps the first.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .ink import unit
+from .polylines import extend, prepare
+from .ruling import HUE_DEG
+
+if TYPE_CHECKING:
+    from .hand_grid import Track
+
+__all__ = ["best_hash", "all_crossings"]
+
+
+def all_crossings(a: list[np.ndarray], b: list[np.ndarray]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The first crossing of every polyline of ``a`` with every one of ``b``, as
+    :func:`~kinegym.vision.polylines.first_crossing` finds it: ``(found (A, B) bool, point (A, B, 2),
+    arc position along the ``a`` line (A, B), along the ``b`` line (A, B))``."""
+    pa, pb = [prepare(p) for p in a], [prepare(p) for p in b]
+    na, nb = len(pa), len(pb)
+    la = np.repeat(np.arange(na), [len(p.seg) for p in pa])  # each segment's line
+    lb = np.repeat(np.arange(nb), [len(p.seg) for p in pb])
+    seg_a, seg_b = np.concatenate([p.seg for p in pa]), np.concatenate([p.seg for p in pb])
+    pts_a, pts_b = np.concatenate([p.pts[:-1] for p in pa]), np.concatenate([p.pts[:-1] for p in pb])
+    arc_a, arc_b = np.concatenate([p.arc[:-1] for p in pa]), np.concatenate([p.arc[:-1] for p in pb])
+    lo_a, hi_a = np.concatenate([p.lo_a for p in pa]), np.concatenate([p.hi_a for p in pa])
+    lo_b, hi_b = np.concatenate([p.lo for p in pb]), np.concatenate([p.hi for p in pb])
+    ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
+                        & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
+    rr, ss = seg_a[ii], seg_b[jj]
+    rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
+    qp = pts_b[jj] - pts_a[ii]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
+        u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
+    ok = np.flatnonzero((np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1))
+    found = np.zeros((na, nb), bool)
+    point, pos_a, pos_b = np.zeros((na, nb, 2)), np.zeros((na, nb)), np.zeros((na, nb))
+    # the pairs come in segment order, a's first: the first of a pair of lines is the reference's first
+    pair = la[ii[ok]] * nb + lb[jj[ok]]
+    _, first = np.unique(pair, return_index=True)
+    for k in ok[first].tolist():
+        i, j = ii[k], jj[k]
+        x, y = la[i], lb[j]
+        r, s = seg_a[i], seg_b[j]
+        found[x, y] = True
+        point[x, y] = pts_a[i] + t[k] * r
+        pos_a[x, y] = float(arc_a[i] + t[k] * np.hypot(*r))
+        pos_b[x, y] = float(arc_b[j] + u[k] * np.hypot(*s))
+    return found, point, pos_a, pos_b
+
+
+def _choices(n: int, k: int, share: np.ndarray) -> np.ndarray:
+    """``(C, k)`` the choices of ``k`` of ``n`` tracks no two of which share a stroke, in
+    :func:`itertools.combinations` order."""
+    out = [c for c in itertools.combinations(range(n), k)
+           if not any(share[i, j] for i, j in itertools.combinations(c, 2))]
+    return np.array(out, np.intp).reshape(len(out), k)
+
+
+def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float,
+              share_a: np.ndarray, share_b: np.ndarray
+              ) -> tuple[float, tuple[int, ...], tuple[int, ...], np.ndarray] | None:
+    """:func:`~kinegym.vision.hand_grid._best_hash` of the same tracks (``share_a``/``share_b``: their
+    :func:`~kinegym.vision.hand_grid._sharing`), scored as one array."""
+    h, w = shape
+    side = float(max(h, w))
+    ea = [extend(t.pts, ext) for t in fa]
+    eb = [extend(t.pts, ext) for t in fb]
+    ca, cb = _choices(len(fa), k, share_a), _choices(len(fb), k, share_b)
+    if not len(ca) or not len(cb):
+        return None
+    found, point, pos_a0, pos_b0 = all_crossings(ea, eb)
+    # every choice pair (a's choice outer, b's inner: the reference's loop order) whose crossings all exist
+    A = np.repeat(ca, len(cb), axis=0)  # (N, k)
+    B = np.tile(cb, (len(ca), 1))
+    ok = found[A[:, :, None], B[:, None, :]].all(axis=(1, 2))
+    A, B = A[ok], B[ok]
+    if not len(A):
+        return None
+    pts = point[A[:, :, None], B[:, None, :]]  # (N, k, k, 2)
+    pos_a, pos_b = pos_a0[A[:, :, None], B[:, None, :]], pos_b0[A[:, :, None], B[:, None, :]]
+    rows = np.arange(len(A))[:, None]
+    oa = np.argsort(pos_b[:, :, 0], axis=1, kind="stable")
+    ob = np.argsort(pos_a[:, 0, :], axis=1, kind="stable")
+    pts = pts[rows[:, :, None], oa[:, :, None], ob[:, None, :]]
+    pos_a = pos_a[rows[:, :, None], oa[:, :, None], ob[:, None, :]]
+    pos_b = pos_b[rows[:, :, None], oa[:, :, None], ob[:, None, :]]
+    A0, B0 = A, B  # (the colours are summed in the choice's own order, as the reference sums them)
+    A, B = np.take_along_axis(A, oa, axis=1), np.take_along_axis(B, ob, axis=1)
+    da, db = np.diff(pos_a, axis=2), np.diff(pos_b, axis=1)
+    keep = (np.all(da > 0, axis=(1, 2)) | np.all(da < 0, axis=(1, 2))) & \
+           (np.all(db > 0, axis=(1, 2)) | np.all(db < 0, axis=(1, 2)))
+    allsz = np.concatenate([np.abs(da).reshape(len(A), -1), np.abs(db).reshape(len(A), -1)], axis=1)
+    v = np.sort(allsz, axis=1)
+    m = v.shape[1] // 2
+    cell = v[:, m] if v.shape[1] % 2 else (v[:, m - 1] + v[:, m]) / 2
+    keep &= ~(cell < 0.06 * max(h, w)) & ~(v[:, -1] > 2.6 * v[:, 0])
+    score = np.zeros(len(A))
+    short = np.zeros(len(A), bool)  # a line too short for its cells: the reference's -inf, from there on
+    missing = np.zeros(len(A), np.intp)
+    margin = 0.04 * max(h, w)
+
+    def at_edge(p: np.ndarray) -> bool:
+        return bool(p[0] < margin or p[1] < margin or p[0] > w - margin or p[1] > h - margin)
+
+    lines = [(fa, [float(np.hypot(*np.diff(e, axis=0).T).sum()) for e in ea], A, pos_a, 1),
+             (fb, [float(np.hypot(*np.diff(e, axis=0).T).sum()) for e in eb], B, pos_b, 0)]
+    for tracks, length, chosen, pos, axis in lines:
+        span = np.array([t.span for t in tracks])
+        strength = np.array([t.strength for t in tracks])
+        edge0 = np.array([at_edge(t.pts[0]) for t in tracks])
+        edge1 = np.array([at_edge(t.pts[-1]) for t in tracks])
+        ln = np.array(length)
+        for x in range(k):
+            i = chosen[:, x]
+            p = pos[:, x, :] if axis == 1 else pos[:, :, x]
+            now_short = ~short & (span[i] < (k - 1 + 0.4) * cell)
+            short |= now_short
+            live = ~short
+            score = np.where(live, score + strength[i] * np.minimum(span[i], (k + 1.5) * cell) / side, score)
+            for arm, edge in ((p.min(axis=1) - ext, edge0[i]), (ln[i] - ext - p.max(axis=1), edge1[i])):
+                no_arm = live & (arm < 0.15 * cell) & ~edge
+                score = np.where(no_arm, score - 0.15, score)
+                missing += no_arm
+    keep &= ~(missing > k)
+    with np.errstate(divide="ignore", invalid="ignore"):  # (rows with a cell of size 0 are not kept)
+        ratio = v[:, -1] / v[:, 0] - 1.0
+    outside = (pos_a < ext - 2).sum(axis=(1, 2)) + (pos_b < ext - 2).sum(axis=(1, 2))
+    score = score - 0.1 * outside
+    score = score - 0.3 * ratio
+    if fa[0].colour is not None:  # one pen draws a '#': lines of another colour are something else
+        hue = np.array([t.colour for t in fa + fb])
+        u = hue[np.concatenate([A0, len(fa) + B0], axis=1)]  # (N, 2k, 3)
+        for r in np.flatnonzero(keep & ~short):
+            spread = math.degrees(math.acos(float(np.clip((u[r] @ unit(u[r].sum(axis=0))).min(), -1.0, 1.0))))
+            score[r] -= 0.02 * max(0.0, spread - HUE_DEG)
+    score = np.where(short, -math.inf, score)
+    if not keep.any():
+        return None
+    r = int(np.flatnonzero(keep)[np.argmax(score[keep])])
+    return float(score[r]), tuple(int(i) for i in A[r]), tuple(int(j) for j in B[r]), pts[r]
