@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinegym.vision import hand_grid, ink, polylines
+from kinegym.vision import hand_grid, ink, polylines, tracks
 
 
 def _runs(mask: np.ndarray) -> list[int]:
@@ -93,7 +93,7 @@ def test_directions_equal_the_one_pass_energy(seed: int) -> None:
     energy = np.array([(np.bincount(row).astype(np.float64) ** 2).sum() for row in b])
     energy = np.convolve(np.concatenate([energy[-2:], energy, energy[:2]]), [0.25, 0.5, 1.0, 0.5, 0.25], "same")[2:-2]
     i = int(np.argmax(energy))
-    phi_a, _ = hand_grid._directions(mask, ink._stroke_width(mask))[0]
+    phi_a, _ = tracks._directions(mask, ink._stroke_width(mask))[0]
     assert phi_a == float(np.mod(th[i] + np.pi / 2, np.pi))
 
 
