@@ -119,23 +119,31 @@ def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
     peaks[:, 1:] &= ~peaks[:, :-1]  # one peak per plateau: its first px
     tol0 = max(3.0, 0.4 * hb)
     r = int(math.ceil(width)) + 1
-    wide = cv2.dilate(rot, np.ones((1, 2 * r + 1), np.uint8))  # ink within r px across
+    wide: np.ndarray | None = None  # the turned mask widened r px across, when first needed
     active: list[dict] = []
     done: list[dict] = []
     for k in range(nb):
         xs = np.flatnonzero(peaks[k])
         vals = prof[k, xs].tolist()
         taken = [False] * len(xs)
-        # extend active tracks, nearest prediction first (ties: the older track, then the left peak)
+        # extend active tracks: a peak the track's ink runs on to first, then the nearest prediction
+        # (ties: the older track, then the left peak)
         if active and len(xs):
-            gap = k - np.array([tr["k"][-1] for tr in active])
-            pred = np.array([tr["x"][-1] for tr in active]) + np.array([tr["slope"] for tr in active]) * gap
+            last_k = np.array([tr["k"][-1] for tr in active])
+            last_x = np.array([tr["x"][-1] for tr in active])
+            gap = k - last_k
+            pred = last_x + np.array([tr["slope"] for tr in active]) * gap
             dist = np.abs(xs[None, :] - pred[:, None])
             ti, pi = np.nonzero(dist <= (tol0 * gap)[:, None])
-            # a peak the track's ink runs on to comes first: across a crossing, another stroke's
-            # peak may lie nearer the prediction than the track's own
-            ends = np.array([[tr["x"][-1], (tr["k"][-1] + 0.5) * hb] for tr in active])[ti]
-            joined = _joined(wide, ends, np.stack([xs[pi], np.full(len(pi), (k + 0.5) * hb)], axis=1))
+            if len(np.unique(ti)) < len(ti) or len(np.unique(pi)) < len(pi):
+                # rivals: a peak the track's ink runs on to comes first (across a crossing, another
+                # stroke's peak may lie nearer the prediction than the track's own)
+                if wide is None:
+                    wide = cv2.dilate(rot, np.ones((1, 2 * r + 1), np.uint8))  # ink within r px across
+                ends = np.stack([last_x[ti], (last_k[ti] + 0.5) * hb], axis=1)
+                joined = _joined(wide, ends, np.stack([xs[pi], np.full(len(pi), (k + 0.5) * hb)], axis=1))
+            else:  # no track or peak has two candidates: the order changes nothing
+                joined = np.ones(len(ti), bool)
             order = np.lexsort((pi, ti, dist[ti, pi], ~joined))
             cand = zip(ti[order].tolist(), pi[order].tolist())
         else:
