@@ -219,6 +219,9 @@ def test_a_track_keeps_to_its_own_stroke_across_a_crossing() -> None:
 
 
 def test_joined_steps_follow_ink_not_gaps() -> None:
+    """A step from a track's last point to a peak is joined when ink runs along it at 85 % of its
+    rows: along a stroke yes, across to a point beside it or in empty paper no, over a short gap in
+    the pen yes unless the share asked for is higher."""
     from kinegym.vision.tracks import _joined
 
     wide = np.zeros((100, 100), np.uint8)
@@ -344,7 +347,7 @@ def test_real_photos_on_graph_paper() -> None:
     Rules at 15 % strength: 13 of 15 (9 before the '#' was sought in the ink darker than
     the rules); at 25 %, as dark as the faintest '#' lines here: 13 (0 before that, 4 before
     heavier rules were told from the pen, 13 before the hue kinds sought the '#' in the ink not
-    of the rules' colour, 14 at stops 60-65). Since stop 66 (a track keeps to its own stroke)
+    of the rules' colour, 14 at stop 65). Since stop 66 (a track keeps to its own stroke)
     image14's '#' in the ink not of the rules' colour is traced right and preferred, but its bottom
     line's curling end, past where the trace stops, is left in and read as an O (p 0.53) in the
     middle-right cell.

@@ -1,8 +1,10 @@
 """The '#' search's fast kernel: :func:`best_hash` gives what
 :func:`~kinegym.vision.hand_grid._best_hash` (the readable reference) gives, bit for bit, with every
-choice of tracks scored at once in numpy instead of one by one in Python (a tenth of the time on a
-960 x 720 frame's 5 x 5 search: 35 x 35 choices of 4 tracks a family). ``tests/test_hash_search.py``
-holds the two equal on real photos' tracks and on random ones.
+choice of tracks scored at once in numpy instead of one by one in Python (up to 35 x 35 choices of 4
+tracks a family for a 5 x 5 '#'). On the 15 real photos at 960 x 720 a call takes a third to a quarter
+of the reference's time (0.9 ms against 2.8 for 3 x 3, 0.8 against 3.2 for 5 x 5; the reference's
+track sharing included, found once per search for the kernel). ``tests/test_hash_search.py`` holds
+the two equal on real photos' tracks and on random ones.
 
 Two steps, each the reference's own arithmetic in the same order (so the same floats):
 
