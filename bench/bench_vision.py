@@ -290,6 +290,20 @@ def print_why(wrong: list[tuple[str, list[tuple[str, str]]]], count: int) -> Non
             print(f"| {kind} | {counts} |")
 
 
+def turned_whole(img: np.ndarray, deg: float) -> np.ndarray:
+    """Photo ``img`` turned ``deg`` about its centre on a canvas grown so that no corner of it is lost
+    (edges replicated): a held-out condition of :func:`_photo_conditions`, and a real test's."""
+    import cv2
+
+    h, w = img.shape[:2]
+    M = cv2.getRotationMatrix2D((w / 2, h / 2), deg, 1.0)
+    c, s = abs(M[0, 0]), abs(M[0, 1])
+    nw, nh = int(h * s + w * c), int(h * c + w * s)
+    M[0, 2] += nw / 2 - w / 2
+    M[1, 2] += nh / 2 - h / 2
+    return cv2.warpAffine(img, M, (nw, nh), borderMode=cv2.BORDER_REPLICATE)
+
+
 def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:
     """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
     ``(label, transform(img, i), readings(board))``; ``readings``: the board texts that count as
@@ -327,15 +341,6 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
         h, w = img.shape[:2]
         return cv2.warpAffine(img, cv2.getRotationMatrix2D((w / 2, h / 2), deg, 1.0), (w, h),
                               borderMode=cv2.BORDER_REPLICATE)
-
-    def turned_whole(img: np.ndarray, deg: float) -> np.ndarray:  # the canvas grown: no corner of the photo is lost
-        h, w = img.shape[:2]
-        M = cv2.getRotationMatrix2D((w / 2, h / 2), deg, 1.0)
-        c, s = abs(M[0, 0]), abs(M[0, 1])
-        nw, nh = int(h * s + w * c), int(h * c + w * s)
-        M[0, 2] += nw / 2 - w / 2
-        M[1, 2] += nh / 2 - h / 2
-        return cv2.warpAffine(img, M, (nw, nh), borderMode=cv2.BORDER_REPLICATE)
 
     def jpeg(img: np.ndarray, quality: int) -> np.ndarray:
         buf = cv2.imencode(".jpg", img[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, quality])[1]

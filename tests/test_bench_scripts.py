@@ -12,31 +12,6 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-from types import ModuleType
-
-import pytest
-
-BENCH = Path(__file__).resolve().parents[1] / "bench"
-
-
-def _bench(name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-@pytest.fixture(scope="module")
-def bench_envs() -> ModuleType:
-    return _bench("bench_envs")
-
-
-@pytest.fixture(scope="module")
-def bench_vision() -> ModuleType:
-    return _bench("bench_vision")
-
 
 def test_the_parts_of_a_step_are_all_found_and_add_up(bench_envs) -> None:
     rate, n, rows = bench_envs.step_parts(0.5, "kinegym/HoleClimbMemoryHints-v0", warm=0.2, wall_pool=3)

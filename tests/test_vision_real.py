@@ -7,6 +7,7 @@ import json
 import math
 import warnings
 from pathlib import Path
+from types import ModuleType
 
 import cv2
 import numpy as np
@@ -196,25 +197,15 @@ def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
     assert same_lattice(made[0].found, made[1].found, 3) and made[1].p > made[0].p
 
 
-def turned_whole(img: np.ndarray, deg: float) -> np.ndarray:
-    """The photo turned ``deg`` about its centre on a canvas grown to hold all of it (edges replicated)."""
-    h, w = img.shape[:2]
-    M = cv2.getRotationMatrix2D((w / 2, h / 2), deg, 1.0)
-    c, s = abs(M[0, 0]), abs(M[0, 1])
-    nw, nh = int(h * s + w * c), int(h * c + w * s)
-    M[0, 2] += nw / 2 - w / 2
-    M[1, 2] += nh / 2 - h / 2
-    return cv2.warpAffine(img, M, (nw, nh), borderMode=cv2.BORDER_REPLICATE)
-
-
-def test_a_track_keeps_to_its_own_stroke_across_a_crossing() -> None:
+def test_a_track_keeps_to_its_own_stroke_across_a_crossing(bench_vision: ModuleType) -> None:
     """Photo 14 turned 30 deg: the top row line runs on past the right column line, an O above it.
     Across the crossing a peak of other ink lay nearer the track's prediction than the line's own;
     the track took it, another track took the line's next peaks, and the line's track ended in the O
     (the O cut by the erased line, read X; the board ``XXO|XOX|O..``). A track now first takes a peak
-    its ink runs on to (:func:`~kinegym.vision.tracks._joined`)."""
+    its ink runs on to (:func:`~kinegym.vision.tracks._joined`). The turn is the benchmark's +30 deg
+    condition (``bench_vision.turned_whole``)."""
     name = "kvuletic2_image14.jpeg"
-    reading = BoardReader().read(turned_whole(read_image(DATA / name), 30))
+    reading = BoardReader().read(bench_vision.turned_whole(read_image(DATA / name), 30))
     assert matches(reading.text(), LABELS[name]), reading.text()
 
 
