@@ -89,11 +89,11 @@ def test_every_crossing_at_once_is_each_pair_s_first_crossing(seed: int) -> None
 def test_best_hash_equals_the_reference_on_random_tracks(seed: int) -> None:
     fa, fb = _draw(seed)
     width, ext = 3.0, 0.06 * 480
-    share_a, share_b = hand_grid._sharing(fa, width), hand_grid._sharing(fb, width)
     for k in (2, 4):
         if len(fa) >= k and len(fb) >= k:
             want = hand_grid._best_hash(fa, fb, k, (480, 480), ext, width)
-            assert _same(hash_search.best_hash(fa, fb, k, (480, 480), ext, width, share_a, share_b), want)
+            got = hash_search.best_hash(fa, fb, k, (480, 480), hash_search.pairs(fa, fb, ext, width))
+            assert _same(got, want)
 
 
 def test_random_tracks_make_hashes_to_compare() -> None:
@@ -122,10 +122,9 @@ def test_best_hash_equals_the_reference_on_real_photos(name: str, turn: float,
     calls: list[tuple[bool, bool]] = []  # (equal to the reference, a '#' found)
     fast = hash_search.best_hash
 
-    def both(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float,
-             share_a: np.ndarray, share_b: np.ndarray) -> tuple | None:
-        got = fast(fa, fb, k, shape, ext, width, share_a, share_b)
-        calls.append((_same(got, hand_grid._best_hash(fa, fb, k, shape, ext, width)), got is not None))
+    def both(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], p: hash_search.Pairs) -> tuple | None:
+        got = fast(fa, fb, k, shape, p)
+        calls.append((_same(got, hand_grid._best_hash(fa, fb, k, shape, p.ext, p.width)), got is not None))
         return got
 
     monkeypatch.setattr(hand_grid, "best_hash", both)

@@ -52,11 +52,11 @@ import numpy as np
 
 from .errors import NoBoardError
 from .grid_lines import _median
-from .hash_search import best_hash
+from .hash_search import best_hash, pairs
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
-from .polylines import extend, first_crossing, prepare, resample
+from .polylines import extend, first_crossing, prepare
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
-from .tracks import Track, _dense, _directions, _tracks
+from .tracks import Track, _dense, _directions, _sharing, _tracks
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
 
@@ -99,24 +99,6 @@ def search_copy(working: np.ndarray, photo: np.ndarray | None = None) -> np.ndar
     h, w = working.shape[:2]
     f = GRID_SIDE_PX / max(h, w)
     return cv2.resize(working, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
-
-
-def _sharing(tracks: list[Track], width: float) -> np.ndarray:
-    """``(T, T)`` bool: pairs of tracks that run along the same stroke for a quarter of the
-    shorter one (a track that strays off a line into a mark shares the line's start)."""
-    pts = [resample(t.pts, 3.0) for t in tracks]
-    out = np.zeros((len(tracks), len(tracks)), bool)
-    near = 2.0 * width + 2.0
-    lo = np.array([p.min(axis=0) for p in pts]) - near
-    hi = np.array([p.max(axis=0) for p in pts]) + near
-    for i, j in itertools.combinations(range(len(tracks)), 2):
-        if np.any(lo[i] > hi[j]) or np.any(lo[j] > hi[i]):
-            continue  # no point of one is near the other's box, let alone the other
-        a, b = (pts[i], pts[j]) if len(pts[i]) <= len(pts[j]) else (pts[j], pts[i])
-        dx, dy = a[:, 0, None] - b[None, :, 0], a[:, 1, None] - b[None, :, 1]
-        dist = np.sqrt((dx * dx + dy * dy).min(axis=1))  # (the root of the least square: the least distance)
-        out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
-    return out
 
 
 def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float
@@ -343,10 +325,10 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
         raise NoBoardError(f"strokes in {len(fa)} and {len(fb)} lines of the two directions; a grid needs 2 + 2")
     ext = 0.06 * max(d.shape)
     found = []
-    share_a, share_b = _sharing(fa, width), _sharing(fb, width)
+    found_pairs = pairs(fa, fb, ext, width)  # (once for every size)
     for n in sizes:  # (best_hash: _best_hash's fast kernel, the same result)
         if len(fa) >= n - 1 and len(fb) >= n - 1:
-            b = best_hash(fa, fb, n - 1, d.shape, ext, width, share_a, share_b)
+            b = best_hash(fa, fb, n - 1, d.shape, found_pairs)
             if b is not None:
                 found.append((b[0] / (2 * (n - 1)), n, b))
     if not found:

@@ -8,9 +8,10 @@ the two equal on real photos' tracks and on random ones.
 
 Two steps, each the reference's own arithmetic in the same order (so the same floats):
 
-1. **Every crossing at once.** The segments of all tracks of one family against all of the other's,
-   boxes tested and crossings solved in one array; per pair of tracks the first crossing in the
-   reference's order (:func:`~kinegym.vision.polylines.first_crossing`: ``a``'s segments, then ``b``'s).
+1. **Every crossing at once** (:func:`pairs`, once for both board sizes). The segments of all tracks
+   of one family against all of the other's, boxes tested and crossings solved in one array; per
+   pair of tracks the first crossing in the reference's order
+   (:func:`~kinegym.vision.polylines.first_crossing`: ``a``'s segments, then ``b``'s).
 2. **Every choice at once.** Each choice of ``k`` tracks per family is a row: its crossings ordered
    across, the lattice's folds, cell sizes, arms and colours tested, and its score summed line by line
    as the reference sums it. The first best row wins, as the reference's ``>`` keeps the first.
@@ -20,18 +21,16 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 
 from .ink import unit
 from .polylines import extend, prepare
 from .ruling import HUE_DEG
+from .tracks import Track, _sharing
 
-if TYPE_CHECKING:
-    from .hand_grid import Track
-
-__all__ = ["best_hash", "all_crossings"]
+__all__ = ["best_hash", "all_crossings", "pairs", "Pairs"]
 
 
 def all_crossings(a: list[np.ndarray], b: list[np.ndarray]
@@ -81,19 +80,47 @@ def _choices(n: int, k: int, share: np.ndarray) -> np.ndarray:
     return np.array(out, np.intp).reshape(len(out), k)
 
 
-def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], ext: float, width: float,
-              share_a: np.ndarray, share_b: np.ndarray
-              ) -> tuple[float, tuple[int, ...], tuple[int, ...], np.ndarray] | None:
-    """:func:`~kinegym.vision.hand_grid._best_hash` of the same tracks (``share_a``/``share_b``: their
-    :func:`~kinegym.vision.hand_grid._sharing`), scored as one array."""
-    h, w = shape
-    side = float(max(h, w))
+@dataclass(frozen=True)
+class Pairs:
+    """What every choice of tracks of two families draws on, found once for every board size: the
+    extension ``ext`` (px) each line was given at both ends, the pen ``width`` (px), which tracks of a
+    family share a stroke at it (``share_a``/``share_b``, :func:`~kinegym.vision.tracks._sharing`), the
+    first crossing of every a-line with every b-line (:func:`all_crossings` of the extended lines)
+    and each extended line's length (px)."""
+
+    ext: float
+    width: float
+    share_a: np.ndarray
+    share_b: np.ndarray
+    found: np.ndarray
+    point: np.ndarray
+    pos_a: np.ndarray
+    pos_b: np.ndarray
+    length_a: np.ndarray
+    length_b: np.ndarray
+
+
+def pairs(fa: list[Track], fb: list[Track], ext: float, width: float) -> Pairs:
+    """:class:`Pairs` of the two families ``fa``, ``fb``, their lines extended by ``ext`` px, drawn
+    with a pen ``width`` px wide."""
     ea = [extend(t.pts, ext) for t in fa]
     eb = [extend(t.pts, ext) for t in fb]
-    ca, cb = _choices(len(fa), k, share_a), _choices(len(fb), k, share_b)
+    length_a, length_b = ([float(np.hypot(*np.diff(e, axis=0).T).sum()) for e in es] for es in (ea, eb))
+    return Pairs(ext, width, _sharing(fa, width), _sharing(fb, width), *all_crossings(ea, eb), np.array(length_a),
+                 np.array(length_b))
+
+
+def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], p: Pairs
+              ) -> tuple[float, tuple[int, ...], tuple[int, ...], np.ndarray] | None:
+    """:func:`~kinegym.vision.hand_grid._best_hash` of the same tracks (``p``: their :func:`pairs` at the
+    reference's ``ext`` and ``width``), scored as one array."""
+    h, w = shape
+    side = float(max(h, w))
+    ext = p.ext
+    ca, cb = _choices(len(fa), k, p.share_a), _choices(len(fb), k, p.share_b)
     if not len(ca) or not len(cb):
         return None
-    found, point, pos_a0, pos_b0 = all_crossings(ea, eb)
+    found, point, pos_a0, pos_b0 = p.found, p.point, p.pos_a, p.pos_b
     # every choice pair (a's choice outer, b's inner: the reference's loop order) whose crossings all exist
     A = np.repeat(ca, len(cb), axis=0)  # (N, k)
     B = np.tile(cb, (len(ca), 1))
@@ -127,22 +154,19 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
     def at_edge(p: np.ndarray) -> bool:
         return bool(p[0] < margin or p[1] < margin or p[0] > w - margin or p[1] > h - margin)
 
-    lines = [(fa, [float(np.hypot(*np.diff(e, axis=0).T).sum()) for e in ea], A, pos_a, 1),
-             (fb, [float(np.hypot(*np.diff(e, axis=0).T).sum()) for e in eb], B, pos_b, 0)]
-    for tracks, length, chosen, pos, axis in lines:
+    for tracks, ln, chosen, pos, axis in ((fa, p.length_a, A, pos_a, 1), (fb, p.length_b, B, pos_b, 0)):
         span = np.array([t.span for t in tracks])
         strength = np.array([t.strength for t in tracks])
         edge0 = np.array([at_edge(t.pts[0]) for t in tracks])
         edge1 = np.array([at_edge(t.pts[-1]) for t in tracks])
-        ln = np.array(length)
         for x in range(k):
             i = chosen[:, x]
-            p = pos[:, x, :] if axis == 1 else pos[:, :, x]
+            q = pos[:, x, :] if axis == 1 else pos[:, :, x]
             now_short = ~short & (span[i] < (k - 1 + 0.4) * cell)
             short |= now_short
             live = ~short
             score = np.where(live, score + strength[i] * np.minimum(span[i], (k + 1.5) * cell) / side, score)
-            for arm, edge in ((p.min(axis=1) - ext, edge0[i]), (ln[i] - ext - p.max(axis=1), edge1[i])):
+            for arm, edge in ((q.min(axis=1) - ext, edge0[i]), (ln[i] - ext - q.max(axis=1), edge1[i])):
                 no_arm = live & (arm < 0.15 * cell) & ~edge
                 score = np.where(no_arm, score - 0.15, score)
                 missing += no_arm

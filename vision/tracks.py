@@ -12,15 +12,20 @@ its strokes traced as *tracks* (polylines that may bend), for :mod:`~kinegym.vis
   it does not (:func:`_joined`: across a crossing, another stroke's peak may lie nearer the
   prediction). Each track is then lengthened along the ink at both ends (:func:`_follow_ends`).
 - **Dense trace** (:func:`_dense`): a chosen track followed every 2 px along its stroke.
+- **Sharing** (:func:`_sharing`): which tracks of a family run along the same stroke (a track that
+  strays off a line into a mark shares the line's start); no two of them are one '#''s lines.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
+from .polylines import resample
 
 __all__ = ["Track"]
 
@@ -256,3 +261,21 @@ def _dense(tr: Track, width: float) -> np.ndarray:
         x = np.sort(np.lib.stride_tricks.sliding_window_view(np.pad(x, 2, mode="edge"), 5), axis=1)[:, 2]
     Minv = cv2.invertAffineTransform(M)
     return np.stack([x, rows], axis=1) @ Minv[:, :2].T + Minv[:, 2]
+
+
+def _sharing(tracks: list[Track], width: float) -> np.ndarray:
+    """``(T, T)`` bool: pairs of tracks that run along the same stroke for a quarter of the
+    shorter one (a track that strays off a line into a mark shares the line's start)."""
+    pts = [resample(t.pts, 3.0) for t in tracks]
+    out = np.zeros((len(tracks), len(tracks)), bool)
+    near = 2.0 * width + 2.0
+    lo = np.array([p.min(axis=0) for p in pts]) - near
+    hi = np.array([p.max(axis=0) for p in pts]) + near
+    for i, j in itertools.combinations(range(len(tracks)), 2):
+        if np.any(lo[i] > hi[j]) or np.any(lo[j] > hi[i]):
+            continue  # no point of one is near the other's box, let alone the other
+        a, b = (pts[i], pts[j]) if len(pts[i]) <= len(pts[j]) else (pts[j], pts[i])
+        dx, dy = a[:, 0, None] - b[None, :, 0], a[:, 1, None] - b[None, :, 1]
+        dist = np.sqrt((dx * dx + dy * dy).min(axis=1))  # (the root of the least square: the least distance)
+        out[i, j] = out[j, i] = bool(np.mean(dist < near) > 0.25)
+    return out
