@@ -1,5 +1,6 @@
 """The '#' finder's array shortcuts give what the plain definitions give: the stroke width
-(run lengths), the first crossing of two polylines (tried only where segment boxes meet) and
+(run lengths), the first crossing of two polylines (tried only where segment boxes meet; every pair
+of two sets of polylines in one array) and
 the Radon directions (in chunks of angles), on random inputs, to the last bit; and the copy
 the '#' is sought on, taken from the photo itself at a whole factor."""
 
@@ -71,6 +72,32 @@ def test_first_crossing_matches_every_pair_tried(seed: int) -> None:
     if want is not None:
         assert np.array_equal(got[0], want[0]) and got[1:] == want[1:]
         assert np.array_equal(prepared[0], want[0]) and prepared[1:] == want[1:]
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_every_crossing_at_once_is_each_pair_s_first_crossing(seed: int) -> None:
+    """All pairs' first crossings in one array (the '#' search's) are each pair's, as the plain
+    definition finds it: its segments against the other's, row-major, the first that crosses."""
+    rng = np.random.default_rng(seed)
+
+    def _wavy(start: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
+        return start + np.cumsum(step + rng.normal(0.0, 2.5, (n, 2)), axis=0)
+
+    a = [_wavy(np.array([rng.uniform(50, 400), 0.0]), np.array([0.0, 30.0]), int(rng.integers(2, 16)))
+         for _ in range(int(rng.integers(1, 7)))]
+    b = [_wavy(np.array([0.0, rng.uniform(50, 400)]), np.array([30.0, 0.0]), int(rng.integers(2, 16)))
+         for _ in range(int(rng.integers(1, 7)))]
+    found, point, pos_a, pos_b = polylines.all_crossings(a, b)
+    hits = 0
+    for i, p in enumerate(a):
+        for j, q in enumerate(b):
+            want = _first_crossing(p, q)
+            assert found[i, j] == (want is not None)
+            if want is not None:
+                hits += 1
+                assert np.array_equal(point[i, j], want[0]) and (pos_a[i, j], pos_b[i, j]) == want[1:]
+    if seed < 5:
+        assert hits  # the draws cross: the test compares crossings, not only misses
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -54,7 +54,7 @@ from .errors import NoBoardError
 from .grid_lines import _median
 from .hash_search import best_hash, pairs
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
-from .polylines import extend, first_crossing, prepare
+from .polylines import all_crossings, extend, first_crossing, prepare
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
 from .tracks import Track, _dense, _directions, _sharing, _tracks
 
@@ -352,8 +352,8 @@ def _hash_along(d: np.ndarray, sizes: tuple[int, ...], share: float, colour: np.
     # each chosen line traced densely along its ink, and the crossings taken from those
     for tr in cols + rows:
         tr.dense = _dense(tr, width)
-    pts = np.array([[c[0] if (c := first_crossing(extend(a.dense, ext), extend(b.dense, ext))) is not None
-                      else pts[i, j] for j, b in enumerate(rows)] for i, a in enumerate(cols)])
+    found, dense_pts, _, _ = all_crossings([extend(a.dense, ext) for a in cols], [extend(b.dense, ext) for b in rows])
+    pts = np.where(found[..., None], dense_pts, pts)
     lat = crossing_lattice(n)
     img = pts.reshape(-1, 2).astype(np.float64)
     H, _ = cv2.findHomography(lat, img, 0)

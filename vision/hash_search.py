@@ -8,10 +8,10 @@ the two equal on real photos' tracks and on random ones.
 
 Two steps, each the reference's own arithmetic in the same order (so the same floats):
 
-1. **Every crossing at once** (:func:`pairs`, once for both board sizes). The segments of all tracks
-   of one family against all of the other's, boxes tested and crossings solved in one array; per
-   pair of tracks the first crossing in the reference's order
-   (:func:`~kinegym.vision.polylines.first_crossing`: ``a``'s segments, then ``b``'s).
+1. **Every crossing at once** (:func:`pairs`, once for both board sizes): the segments of all tracks
+   of one family against all of the other's in one array
+   (:func:`~kinegym.vision.polylines.all_crossings`, which the reference's
+   :func:`~kinegym.vision.polylines.first_crossing` runs for one pair).
 2. **Every choice at once.** Each choice of ``k`` tracks per family is a row: its crossings ordered
    across, the lattice's folds, cell sizes, arms and colours tested, and its score summed line by line
    as the reference sums it. The first best row wins, as the reference's ``>`` keeps the first.
@@ -26,50 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .ink import unit
-from .polylines import extend, prepare
+from .polylines import all_crossings, extend
 from .ruling import HUE_DEG
 from .tracks import Track, _sharing
 
-__all__ = ["best_hash", "all_crossings", "pairs", "Pairs"]
-
-
-def all_crossings(a: list[np.ndarray], b: list[np.ndarray]
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The first crossing of every polyline of ``a`` with every one of ``b``, as
-    :func:`~kinegym.vision.polylines.first_crossing` finds it: ``(found (A, B) bool, point (A, B, 2),
-    arc position along the ``a`` line (A, B), along the ``b`` line (A, B))``."""
-    pa, pb = [prepare(p) for p in a], [prepare(p) for p in b]
-    na, nb = len(pa), len(pb)
-    la = np.repeat(np.arange(na), [len(p.seg) for p in pa])  # each segment's line
-    lb = np.repeat(np.arange(nb), [len(p.seg) for p in pb])
-    seg_a, seg_b = np.concatenate([p.seg for p in pa]), np.concatenate([p.seg for p in pb])
-    pts_a, pts_b = np.concatenate([p.pts[:-1] for p in pa]), np.concatenate([p.pts[:-1] for p in pb])
-    arc_a, arc_b = np.concatenate([p.arc[:-1] for p in pa]), np.concatenate([p.arc[:-1] for p in pb])
-    lo_a, hi_a = np.concatenate([p.lo_a for p in pa]), np.concatenate([p.hi_a for p in pa])
-    lo_b, hi_b = np.concatenate([p.lo for p in pb]), np.concatenate([p.hi for p in pb])
-    ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
-                        & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
-    rr, ss = seg_a[ii], seg_b[jj]
-    rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
-    qp = pts_b[jj] - pts_a[ii]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
-        u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
-    ok = np.flatnonzero((np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1))
-    found = np.zeros((na, nb), bool)
-    point, pos_a, pos_b = np.zeros((na, nb, 2)), np.zeros((na, nb)), np.zeros((na, nb))
-    # the pairs come in segment order, a's first: the first of a pair of lines is the reference's first
-    pair = la[ii[ok]] * nb + lb[jj[ok]]
-    _, first = np.unique(pair, return_index=True)
-    for k in ok[first].tolist():
-        i, j = ii[k], jj[k]
-        x, y = la[i], lb[j]
-        r, s = seg_a[i], seg_b[j]
-        found[x, y] = True
-        point[x, y] = pts_a[i] + t[k] * r
-        pos_a[x, y] = float(arc_a[i] + t[k] * np.hypot(*r))
-        pos_b[x, y] = float(arc_b[j] + u[k] * np.hypot(*s))
-    return found, point, pos_a, pos_b
+__all__ = ["best_hash", "pairs", "Pairs"]
 
 
 def _choices(n: int, k: int, share: np.ndarray) -> np.ndarray:
@@ -85,7 +46,8 @@ class Pairs:
     """What every choice of tracks of two families draws on, found once for every board size: the
     extension ``ext`` (px) each line was given at both ends, the pen ``width`` (px), which tracks of a
     family share a stroke at it (``share_a``/``share_b``, :func:`~kinegym.vision.tracks._sharing`), the
-    first crossing of every a-line with every b-line (:func:`all_crossings` of the extended lines)
+    first crossing of every a-line with every b-line (:func:`~kinegym.vision.polylines.all_crossings`
+    of the extended lines)
     and each extended line's length (px)."""
 
     ext: float

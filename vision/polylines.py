@@ -1,16 +1,18 @@
 """Polyline geometry for hand-drawn lines (points ``(N, 2)``, image px): straight extensions
-at both ends, the first crossing of two polylines with its arc positions, points at a fixed
+at both ends, the first crossing of two polylines with its arc positions (of every pair of two
+sets at once), points at a fixed
 step along a polyline. Used by :mod:`~kinegym.vision.hand_grid`, whose traced grid lines are
 polylines (a hand-drawn line is wavy, so it is followed, not fitted with one straight line).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["extend", "first_crossing", "prepare", "Prepared", "resample"]
+__all__ = ["extend", "all_crossings", "first_crossing", "prepare", "Prepared", "resample"]
 
 
 def extend(p: np.ndarray, by: float) -> np.ndarray:
@@ -44,29 +46,55 @@ def prepare(p: np.ndarray) -> Prepared:
     return Prepared(p, seg, lo, hi, lo - 1e-6, hi + 1e-6, np.concatenate([[0.0], np.cumsum(np.hypot(*seg.T))]))
 
 
-def first_crossing(a: np.ndarray | Prepared, b: np.ndarray | Prepared) -> tuple[np.ndarray, float, float] | None:
-    """First crossing of polylines ``a`` and ``b`` (points, or :func:`prepare`'d): the point and
-    its arc positions along each."""
-    A = a if isinstance(a, Prepared) else prepare(a)
-    B = b if isinstance(b, Prepared) else prepare(b)
+def all_crossings(a: Sequence[np.ndarray | Prepared], b: Sequence[np.ndarray | Prepared]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The first crossing of every polyline of ``a`` with every one of ``b`` (points, or :func:`prepare`'d),
+    all segment pairs in one array: ``(found (A, B) bool, point (A, B, 2), arc position along the
+    ``a`` line (A, B), along the ``b`` line (A, B))``. A pair's first crossing is its first in
+    row-major order of segments (``a``'s, then ``b``'s)."""
+    pa = [p if isinstance(p, Prepared) else prepare(p) for p in a]
+    pb = [p if isinstance(p, Prepared) else prepare(p) for p in b]
+    na, nb = len(pa), len(pb)
+    found = np.zeros((na, nb), bool)
+    point, pos_a, pos_b = np.zeros((na, nb, 2)), np.zeros((na, nb)), np.zeros((na, nb))
+    if not na or not nb:
+        return found, point, pos_a, pos_b
+    la = np.repeat(np.arange(na), [len(p.seg) for p in pa])  # each segment's line
+    lb = np.repeat(np.arange(nb), [len(p.seg) for p in pb])
+    seg_a, seg_b = np.concatenate([p.seg for p in pa]), np.concatenate([p.seg for p in pb])
+    pts_a, pts_b = np.concatenate([p.pts[:-1] for p in pa]), np.concatenate([p.pts[:-1] for p in pb])
+    arc_a, arc_b = np.concatenate([p.arc[:-1] for p in pa]), np.concatenate([p.arc[:-1] for p in pb])
+    lo_a, hi_a = np.concatenate([p.lo_a for p in pa]), np.concatenate([p.hi_a for p in pa])
+    lo_b, hi_b = np.concatenate([p.lo for p in pb]), np.concatenate([p.hi for p in pb])
     # only segment pairs whose boxes meet can cross (a hair wider than exact: no rounding
     # could make a pair the boxes rule out cross); the pairs kept stay in row-major order
-    lo_a, hi_a, lo_b, hi_b = A.lo_a, A.hi_a, B.lo, B.hi
     ii, jj = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0])
                         & (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
-    rr, ss = A.seg[ii], B.seg[jj]
+    rr, ss = seg_a[ii], seg_b[jj]
     rxs = rr[:, 0] * ss[:, 1] - rr[:, 1] * ss[:, 0]
-    qp = B.pts[jj] - A.pts[ii]
+    qp = pts_b[jj] - pts_a[ii]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (qp[:, 0] * ss[:, 1] - qp[:, 1] * ss[:, 0]) / rxs
         u = (qp[:, 0] * rr[:, 1] - qp[:, 1] * rr[:, 0]) / rxs
     ok = np.flatnonzero((np.abs(rxs) > 1e-9) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1))
-    if not len(ok):
-        return None
-    k = ok[0]
-    i, j = ii[k], jj[k]
-    r, s = A.seg[i], B.seg[j]
-    return A.pts[i] + t[k] * r, float(A.arc[i] + t[k] * np.hypot(*r)), float(B.arc[j] + u[k] * np.hypot(*s))
+    # each pair of lines' segments come in row-major order: its first entry is its first crossing
+    _, first = np.unique(la[ii[ok]] * nb + lb[jj[ok]], return_index=True)
+    for k in ok[first].tolist():
+        i, j = ii[k], jj[k]
+        x, y = la[i], lb[j]
+        r, s = seg_a[i], seg_b[j]
+        found[x, y] = True
+        point[x, y] = pts_a[i] + t[k] * r
+        pos_a[x, y] = float(arc_a[i] + t[k] * np.hypot(*r))
+        pos_b[x, y] = float(arc_b[j] + u[k] * np.hypot(*s))
+    return found, point, pos_a, pos_b
+
+
+def first_crossing(a: np.ndarray | Prepared, b: np.ndarray | Prepared) -> tuple[np.ndarray, float, float] | None:
+    """First crossing of polylines ``a`` and ``b`` (points, or :func:`prepare`'d): the point and
+    its arc positions along each (:func:`all_crossings` of the one pair)."""
+    found, point, pos_a, pos_b = all_crossings([a], [b])
+    return (point[0, 0], float(pos_a[0, 0]), float(pos_b[0, 0])) if found[0, 0] else None
 
 
 def resample(p: np.ndarray, step: float) -> np.ndarray:
