@@ -18,7 +18,7 @@ from kinegym.vision import board_reader, ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.grid_choice import HUE_KINDS, same_lattice
 from kinegym.vision.hand_grid import HashGrid, Track
-from kinegym.vision.hash_cells import FLICK_CELLS, MAX_PERSPECTIVE, affine_lattice, erase_mask, perspective_ratio
+from kinegym.vision.hash_cells import ALONG_CELLS, FLICK_CELLS, MAX_PERSPECTIVE, affine_lattice, erase_mask, perspective_ratio
 from kinegym.vision.image_io import read_image
 from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
 from kinegym.vision.polylines import resample
@@ -246,6 +246,32 @@ def test_a_flick_at_a_line_s_tip_goes_with_the_line_and_a_larger_piece_stays() -
     assert not out[185, 75] and not out[173, 87]  # the O
 
 
+def test_a_narrow_x_against_a_line_s_tip_stays_and_a_stroke_gone_over_goes() -> None:
+    """A narrow X drawn against a '#' line's end, beside the line and behind its tip, is elongated
+    and under a cell across like a flick, but it does not go on from the tip: it stays (real-like
+    photo 60,131's X was erased and read empty). A second stroke along the line behind its tip (a
+    line gone over twice) goes with the line."""
+    d = np.zeros((200, 200), np.float32)
+    cols = [Track(np.array([[x, 40.0], [x, 160.0]]), 1.0, 10) for x in (75.0, 125.0)]
+    rows = [Track(np.array([[40.0, y], [160.0, y]]), 1.0, 10) for y in (75.0, 125.0)]
+    for tr in cols + rows:  # the '#': cells 50 px
+        tr.dense = resample(tr.pts, 2.0)
+        cv2.line(d, tuple(int(v) for v in tr.pts[0]), tuple(int(v) for v in tr.pts[1]), 1.0, 2)
+    cv2.line(d, (160, 130), (144, 172), 1.0, 2)  # a narrow X below the lower row line's right tip
+    cv2.line(d, (144, 130), (160, 172), 1.0, 2)
+    cv2.line(d, (130, 158), (131, 130), 1.0, 2)  # the right column gone over again near its foot
+    crossings = np.array([[[75.0, 75.0], [75.0, 125.0]], [[125.0, 75.0], [125.0, 125.0]]])
+    grid = HashGrid(3, np.eye(3), cols, rows, crossings, 2.0, 0.3, 1.0, 0.0)
+    ys, xs = np.nonzero(d[128:, 138:] > 0.5)
+    assert np.ptp(ys) < 50 * FLICK_CELLS  # the X is no larger than a flick, and elongated like one:
+    ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(float)))
+    assert ev[1] > 5.0 * ev[0]
+    out = erase_mask(grid, d)
+    assert not out[151, 152] and not out[167, 146] and not out[167, 158]  # the X stays
+    assert out[145, 130] and out[135, 131]  # the stroke gone over goes
+    assert 5.5 / 50 < ALONG_CELLS  # (it lies 5 to 6 px from the line's course)
+
+
 def test_the_affine_lattice_of_crossings_and_the_perspective_ratio() -> None:
     """An affine lattice has ratio 1 and is its crossings' own fit; a camera's tilt gives a ratio
     above 1; a lattice whose horizon crosses the field has none."""
@@ -335,8 +361,10 @@ def on_graph_paper(img: np.ndarray, strength: float) -> np.ndarray:
 
 def test_real_photos_on_graph_paper() -> None:
     """The real photos with graph-paper rules laid over them, read as the game reads (3 x 3).
-    Rules at 15 % strength: 13 of 15 (9 before the '#' was sought in the ink darker than
-    the rules); at 25 %, as dark as the faintest '#' lines here: 13 (0 before that, 4 before
+    Rules at 15 % strength: 14 of 15 (9 before the '#' was sought in the ink darker than
+    the rules, 13 before stop 67 kept a mark beside a line's tip, behind it: image6's top-right
+    X, against the upper row line's end, and its lower-right O, into which the right column's trace
+    runs, had gone with the lines as flicks); at 25 %, as dark as the faintest '#' lines here: 13 (0 before that, 4 before
     heavier rules were told from the pen, 13 before the hue kinds sought the '#' in the ink not
     of the rules' colour, 14 at stop 65). Since stop 66 (a track keeps to its own stroke)
     image14's '#' in the ink not of the rules' colour is traced right and preferred, but its bottom
@@ -346,7 +374,7 @@ def test_real_photos_on_graph_paper() -> None:
     def right(strength: float) -> int:
         return sum(matches(BoardReader(size=3).read(on_graph_paper(read_image(DATA / name), strength)).text(), label)
                    for name, label in LABELS.items())
-    assert right(0.15) >= 13 and right(0.25) >= 13
+    assert right(0.15) >= 14 and right(0.25) >= 13
 
 
 def test_a_ruling_with_no_straight_runs_reads_without_numeric_warnings() -> None:

@@ -26,13 +26,19 @@ if TYPE_CHECKING:
     from .board_reader import BoardReader
 
 __all__ = ["SearchCopy", "read_hash", "line_contrast", "erase_mask", "perspective_ratio", "affine_lattice",
-           "FLICK_CELLS", "MAX_PERSPECTIVE"]
+           "FLICK_CELLS", "ALONG_CELLS", "MAX_PERSPECTIVE"]
 
 #: The most a flick at a '#' line's tip spans (cells, its box's longer side) that
 #: :func:`erase_mask` takes for the line's. Uncapped, a piece in which graph paper's rules
 #: joined marks up went with the line, marks and all (stop 60: +13 -2 of 1,000 real-like photos);
 #: at 0.75 a real wavy line's untraced tail (0.85 cell) stayed and read as an X.
 FLICK_CELLS = 1.0
+
+#: A piece at a '#' line's tip whose px lie within this much of a cell of the line's course (half of
+#: them, across it) runs along the line - a stroke gone over twice - and goes with it even behind the
+#: tip (:func:`_goes_on`). On 1,000 tuned real-like photos 0.10 and 0.15 read 873 boards, 0.20 and
+#: 0.22 871; on a fresh 300 257, 257 and 258; none at all 873 and 256 (bench/README.md).
+ALONG_CELLS = 0.15
 
 #: the most a '#' lattice's far field corner may lie deeper than its near one (:func:`perspective_ratio`);
 #: beyond it the lines' convergence is the hand's and the cells are read on the crossings' affine
@@ -184,18 +190,22 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     ink: along their dense traces, a pen width and a half either side, plus any stroke left
     hanging at a line's tip (a hand-drawn line often ends in a hook or a flick that leaves
     its straight course; left in, it would read as a mark in an outer cell). A flick is
-    elongated and no more than :data:`FLICK_CELLS` of a cell across: a larger piece at a tip is
-    a mark, or marks joined up by graph paper's rules, and stays."""
+    elongated, no more than :data:`FLICK_CELLS` of a cell across, and goes on from the tip or
+    runs along the line (:func:`_goes_on`): a larger piece at a tip is a mark, or marks joined up
+    by graph paper's rules, and an elongated piece beside the line, behind its tip, is a narrow X
+    drawn against the line's end; both stay."""
     out = np.zeros(d.shape, np.uint8)
     thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
     tips = np.zeros(d.shape, np.uint8)
+    g = grid.crossings
+    cell = float(np.median(np.concatenate([np.hypot(*np.diff(g, axis=k).reshape(-1, 2).T) for k in (0, 1)])))
+    ends = []  # each line's two tips: (tip, its outward unit direction)
     for tr in grid.cols + grid.rows:
         p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
         cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
-        for tip in (tr.dense[0], tr.dense[-1]):
-            cv2.circle(tips, tuple(int(v) for v in np.rint(tip)), int(thick + 2), 1, -1)
-    g = grid.crossings
-    cell = float(np.median(np.concatenate([np.hypot(*np.diff(g, axis=k).reshape(-1, 2).T) for k in (0, 1)])))
+        for run in (tr.dense[::-1], tr.dense):  # from the far end to the tip
+            ends.append(_tip_and_direction(run, 0.3 * cell))
+            cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), int(thick + 2), 1, -1)
     left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
     n_lab, lab = cv2.connectedComponents(left, connectivity=8)
     touching = np.unique(lab[(tips > 0) & (left > 0)])
@@ -212,6 +222,34 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
         if max(xs.max() - xs.min(), ys.max() - ys.min()) > FLICK_CELLS * cell:
             continue  # too large for a flick
         ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
-        if ev[1] > 5.0 * max(ev[0], 1e-6):  # a flick or hook (elongated), not a mark touching the tip
+        if ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, ends, thick + 3.5, cell):  # a flick or hook
             out[ys, xs] = 1
     return out
+
+
+def _tip_and_direction(run: np.ndarray, back: float) -> tuple[np.ndarray, np.ndarray]:
+    """A traced line's tip (the last point of ``run``) and the unit direction in which the line
+    leaves it, from the point ``back`` px before it along the trace (the line's last stretch, not
+    one wavy step)."""
+    to_tip = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(run[::-1], axis=0).T))])
+    before = run[::-1][min(int(np.searchsorted(to_tip, back)), len(run) - 1)]
+    u = run[-1] - before
+    return run[-1], u / max(float(np.hypot(*u)), 1e-9)
+
+
+def _goes_on(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.ndarray]], near: float,
+             cell: float) -> bool:
+    """Whether the piece of ink at px ``xs``, ``ys`` goes on from a line's tip that it touches (within
+    ``near`` px; ``ends``: (tip, outward direction) of each line): its px lie ahead of the tip on
+    the whole, or along the line (half of them within :data:`ALONG_CELLS` of a cell of its course,
+    a stroke gone over twice). A piece beside the line behind its tip - a mark drawn against the
+    line's end - does not."""
+    pts = np.stack([xs, ys], axis=1).astype(np.float64)
+    for tip, u in ends:
+        rel = pts - tip
+        if float(np.min(np.hypot(rel[:, 0], rel[:, 1]))) > near:
+            continue
+        ahead, aside = rel @ u, np.abs(rel @ np.array([-u[1], u[0]]))
+        if float(ahead.mean()) > 0.0 or float(np.median(aside)) < ALONG_CELLS * cell:
+            return True
+    return False
