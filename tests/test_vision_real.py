@@ -18,7 +18,14 @@ from kinegym.vision import board_reader, ink
 from kinegym.vision.board_reader import BoardReader, NoBoardError, debug_image
 from kinegym.vision.grid_choice import HUE_KINDS, same_lattice
 from kinegym.vision.hand_grid import HashGrid, Track
-from kinegym.vision.hash_cells import ALONG_CELLS, FLICK_CELLS, MAX_PERSPECTIVE, affine_lattice, erase_mask, perspective_ratio
+from kinegym.vision.hash_cells import (
+    ALONG_CELLS,
+    FLICK_CELLS,
+    MAX_PERSPECTIVE,
+    affine_lattice,
+    erase_mask,
+    perspective_ratio,
+)
 from kinegym.vision.image_io import read_image
 from kinegym.vision.ink import NOISE_FLOOR_CAP, NOISY_SIGMA, ink_mask, ink_threshold, local_ink_threshold, noise_sigma
 from kinegym.vision.polylines import resample
@@ -209,6 +216,18 @@ def test_a_track_keeps_to_its_own_stroke_across_a_crossing(bench_vision: ModuleT
     assert matches(reading.text(), LABELS[name]), reading.text()
 
 
+@pytest.mark.parametrize("name", ["kvuletic2_image13.jpeg", "kvuletic2_image15.jpeg"])
+def test_a_curl_past_where_a_line_s_trace_stops_goes_with_the_line(bench_vision: ModuleType, name: str) -> None:
+    """Photos 13 and 15 turned 30 deg: the lower row line curls up at its right end, past where its
+    trace stops; the curl leaves the column line about a fifth of a cell from the trace's tip, and
+    left in it read as an X in the middle-right cell (``XXO|XOX|O..``). A stroke hanging at a tip
+    is now sought within :data:`~kinegym.vision.hash_cells.TIP_CELLS` of a cell of it (a pen width
+    and a half before stop 67). That wider circle would take a mark beside the line too; a piece
+    goes with the line only if it also goes on from the tip or runs along the line."""
+    reading = BoardReader().read(bench_vision.turned_whole(read_image(DATA / name), 30))
+    assert matches(reading.text(), LABELS[name]), reading.text()
+
+
 def test_joined_steps_follow_ink_not_gaps() -> None:
     """A step from a track's last point to a peak is joined when ink runs along it at 85 % of its
     rows: along a stroke yes, across to a point beside it or in empty paper no, over a short gap in
@@ -364,8 +383,8 @@ def test_real_photos_on_graph_paper() -> None:
     Rules at 15 % strength: 14 of 15 (9 before the '#' was sought in the ink darker than
     the rules, 13 before stop 67 kept a mark beside a line's tip, behind it: image6's top-right
     X, against the upper row line's end, and its lower-right O, into which the right column's trace
-    runs, had gone with the lines as flicks); at 25 %, as dark as the faintest '#' lines here: 13 (0 before that, 4 before
-    heavier rules were told from the pen, 13 before the hue kinds sought the '#' in the ink not
+    runs, had gone with the lines as flicks); at 25 %, as dark as the faintest '#' lines here: 13
+    (0 before that, 4 before heavier rules were told from the pen, 13 before the hue kinds sought the '#' in the ink not
     of the rules' colour, 14 at stop 65). Since stop 66 (a track keeps to its own stroke)
     image14's '#' in the ink not of the rules' colour is traced right and preferred, but its bottom
     line's curling end, past where the trace stops, is left in and read as an O (p 0.53) in the

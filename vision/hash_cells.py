@@ -26,13 +26,21 @@ if TYPE_CHECKING:
     from .board_reader import BoardReader
 
 __all__ = ["SearchCopy", "read_hash", "line_contrast", "erase_mask", "perspective_ratio", "affine_lattice",
-           "FLICK_CELLS", "ALONG_CELLS", "MAX_PERSPECTIVE"]
+           "FLICK_CELLS", "ALONG_CELLS", "TIP_CELLS", "MAX_PERSPECTIVE"]
 
 #: The most a flick at a '#' line's tip spans (cells, its box's longer side) that
 #: :func:`erase_mask` takes for the line's. Uncapped, a piece in which graph paper's rules
 #: joined marks up went with the line, marks and all (stop 60: +13 -2 of 1,000 real-like photos);
 #: at 0.75 a real wavy line's untraced tail (0.85 cell) stayed and read as an X.
 FLICK_CELLS = 1.0
+
+#: The circle round a '#' line's tip (cells; at least a pen width and a half) that a stroke left hanging
+#: there touches. A line's trace can stop short of a curl at its end (real photos 13 and 15 turned +30
+#: deg: the curl left the column line a fifth of a cell from the row line's tip and read as an X).
+#: With marks beside the line kept (:func:`_goes_on`), 0.15 / 0.20 / 0.25 / 0.30 read 254 / 255 / 255
+#: / 255 of the 255 real condition readings, 873 / 872 / 873 / 872 of 1,000 tuned real-like photos and
+#: 257 of a fresh 300 each (a pen width and a half: 253, 873, 257; bench/README.md).
+TIP_CELLS = 0.25
 
 #: A piece at a '#' line's tip whose px lie within this much of a cell of the line's course (half of
 #: them, across it) runs along the line - a stroke gone over twice - and goes with it even behind the
@@ -188,8 +196,9 @@ def affine_lattice(grid: HashGrid) -> np.ndarray:
 def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     """uint8 mask (the shape of ``d``, the map the grid was found on) of the chosen lines'
     ink: along their dense traces, a pen width and a half either side, plus any stroke left
-    hanging at a line's tip (a hand-drawn line often ends in a hook or a flick that leaves
-    its straight course; left in, it would read as a mark in an outer cell). A flick is
+    hanging at a line's tip, touching a circle of :data:`TIP_CELLS` of a cell round it (a
+    hand-drawn line often ends in a hook or a flick that leaves its straight course, and its trace
+    can stop short of it; left in, it would read as a mark in an outer cell). A flick is
     elongated, no more than :data:`FLICK_CELLS` of a cell across, and goes on from the tip or
     runs along the line (:func:`_goes_on`): a larger piece at a tip is a mark, or marks joined up
     by graph paper's rules, and an elongated piece beside the line, behind its tip, is a narrow X
@@ -200,12 +209,13 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     g = grid.crossings
     cell = float(np.median(np.concatenate([np.hypot(*np.diff(g, axis=k).reshape(-1, 2).T) for k in (0, 1)])))
     ends = []  # each line's two tips: (tip, its outward unit direction)
+    tip_px = int(max(thick + 2, TIP_CELLS * cell))
     for tr in grid.cols + grid.rows:
         p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
         cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
         for run in (tr.dense[::-1], tr.dense):  # from the far end to the tip
             ends.append(_tip_and_direction(run, 0.3 * cell))
-            cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), int(thick + 2), 1, -1)
+            cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), tip_px, 1, -1)
     left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
     n_lab, lab = cv2.connectedComponents(left, connectivity=8)
     touching = np.unique(lab[(tips > 0) & (left > 0)])
@@ -222,7 +232,7 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
         if max(xs.max() - xs.min(), ys.max() - ys.min()) > FLICK_CELLS * cell:
             continue  # too large for a flick
         ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
-        if ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, ends, thick + 3.5, cell):  # a flick or hook
+        if ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, ends, tip_px + 1.5, cell):  # a flick or hook
             out[ys, xs] = 1
     return out
 
