@@ -1,8 +1,9 @@
 """The '#' finder's array shortcuts give what the plain definitions give: the stroke width
 (run lengths), the first crossing of two polylines (tried only where segment boxes meet; every pair
 of two sets of polylines in one array) and
-the Radon directions (in chunks of angles), on random inputs, to the last bit; and the copy
-the '#' is sought on, taken from the photo itself at a whole factor."""
+the Radon directions (in chunks of angles), on random inputs, to the last bit; the copy
+the '#' is sought on, taken from the photo itself at a whole factor; and the turned mask, taken
+from the turned darkness."""
 
 from __future__ import annotations
 
@@ -154,3 +155,23 @@ def test_an_ink_mask_from_levels_measured_once_is_the_mask_measured_again(seed: 
         for local in (False, True):
             again, once = ink.ink_mask(d, share, 0.05, local), ink.ink_mask(d, share, 0.05, local, levels)
             assert np.array_equal(again[0], once[0]) and np.array_equal(again[1], once[1]) and again[2] == once[2]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_turned_mask_is_where_the_turned_darkness_is(seed: int) -> None:
+    """``tracks._tracks`` turns only the darkness under the mask and takes the turned mask as where
+    it is above 0 (one warp less a direction): the same px as turning the mask itself, for masks
+    made as the '#' search makes them (any share, level or local threshold, zero darkness in the map)."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    d = (rng.random((150, 200)) ** 3).astype(np.float32)
+    d[rng.random(d.shape) < 0.2] = 0.0  # paper with no ink at all
+    d[60:64, 10:190] = 0.8
+    for share, above, local in ((0.0, 0.0, False), (0.22, 0.0, True), (0.45, 0.1, False)):
+        mask, _, width = ink.ink_mask(d, share, above, local)
+        dark = np.where(mask > 0, d, 0.0).astype(np.float32)  # as hand_grid._find_hash_grid makes it
+        for phi in (0.0, 0.4, 1.9):
+            _, M, rot = tracks._tracks(mask, phi, width, dark)
+            want = cv2.warpAffine(mask, M, rot.shape[::-1], flags=cv2.INTER_NEAREST)
+            assert rot.dtype == np.uint8 and np.array_equal(rot, want)

@@ -237,6 +237,7 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
         mask[ruling.paints(d, colour)] = 0  # the rules' own ink, where it is darker (they cross, say)
     if cv2.countNonZero(mask) < 1e-4 * mask.size:
         raise NoBoardError("the image holds no ink")
+    # (the mask's px lie above 0.6 of a threshold >= 0, so ``dark`` is above 0 exactly on the mask)
     dark, memo = np.where(mask > 0, d, 0.0).astype(np.float32), {}
 
     def traced(phi: float) -> list[Track]:  # each direction traced once (a rival pair shares the first)

@@ -108,14 +108,17 @@ def _rotation(phi: float, shape: tuple[int, int]) -> tuple[np.ndarray, tuple[int
 def _tracks(mask: np.ndarray, phi: float, width: float, dark: np.ndarray
             ) -> tuple[list[Track], np.ndarray, np.ndarray]:
     """Tracks of the family running along ``phi``; also the turning affine and the turned
-    mask. ``dark`` is the darkness under the mask (float32): a track's ``ink``."""
+    mask. ``dark`` is the darkness under the mask (float32, above 0 exactly where the mask is
+    set): a track's ``ink``."""
     M, (wr, hr) = _rotation(phi, mask.shape)
-    rot = cv2.warpAffine(mask, M, (wr, hr), flags=cv2.INTER_NEAREST)
+    turned_dark = cv2.warpAffine(dark, M, (wr, hr), flags=cv2.INTER_NEAREST)
+    # the turned mask is where the turned darkness is: the same px as turning the mask, one warp less
+    rot = (turned_dark > 0).view(np.uint8)
     hb = max(4, hr // _BANDS)
     nb = hr // hb
     ww = max(3, int(round(0.3 * hb)) | 1)
     prof, dprof = (cv2.blur(m[: nb * hb].reshape(nb, hb, wr).sum(axis=1, dtype=np.float32), (ww, 1)) * ww
-                   for m in (rot, cv2.warpAffine(dark, M, (wr, hr), flags=cv2.INTER_NEAREST)))
+                   for m in (rot, turned_dark))
     # (the band's ink within a window - a slanted stroke stays whole - as sums, not means)
     full = hb * width  # a stroke of the family crossing the whole band
     thr = 0.5 * full
