@@ -244,21 +244,27 @@ def test_joined_steps_follow_ink_not_gaps() -> None:
     assert _joined(wide, a[:1], b[:1], share=0.95).tolist() == [False]
 
 
+def _drawn_hash() -> tuple[np.ndarray, HashGrid]:
+    """A 200 x 200 map with a straight '#' drawn on it (cells 50 px, lines 40..160 px) and its grid."""
+    d = np.zeros((200, 200), np.float32)
+    cols = [Track(np.array([[x, 40.0], [x, 160.0]]), 1.0, 10) for x in (75.0, 125.0)]
+    rows = [Track(np.array([[40.0, y], [160.0, y]]), 1.0, 10) for y in (75.0, 125.0)]
+    for tr in cols + rows:
+        tr.dense = resample(tr.pts, 2.0)
+        cv2.line(d, tuple(int(v) for v in tr.pts[0]), tuple(int(v) for v in tr.pts[1]), 1.0, 2)
+    crossings = np.array([[[75.0, 75.0], [75.0, 125.0]], [[125.0, 75.0], [125.0, 125.0]]])
+    return d, HashGrid(3, np.eye(3), cols, rows, crossings, 2.0, 0.3, 1.0, 0.0)
+
+
 def test_a_flick_at_a_line_s_tip_goes_with_the_line_and_a_larger_piece_stays() -> None:
     """The '#' lines' erase mask takes a short elongated stroke hanging at a line's tip with the
     line; a longer one at a tip (marks joined up by graph paper's rules took whole marks with it,
     stop 60) and a round mark touching a tip stay."""
-    d = np.zeros((200, 200), np.float32)
-    cols = [Track(np.array([[x, 40.0], [x, 160.0]]), 1.0, 10) for x in (75.0, 125.0)]
-    rows = [Track(np.array([[40.0, y], [160.0, y]]), 1.0, 10) for y in (75.0, 125.0)]
-    for tr in cols + rows:  # the '#': cells 50 px
-        tr.dense = resample(tr.pts, 2.0)
-        cv2.line(d, tuple(int(v) for v in tr.pts[0]), tuple(int(v) for v in tr.pts[1]), 1.0, 2)
+    d, grid = _drawn_hash()
     cv2.line(d, (75, 40), (60, 22), 1.0, 2)  # a flick at the left line's top: 0.3 cell across
     cv2.line(d, (125, 40), (185, 5), 1.0, 2)  # a longer stroke at the right line's top: 1.2 cells
     cv2.circle(d, (75, 173), 12, 1.0, 2)  # an O touching the left line's foot
-    crossings = np.array([[[75.0, 75.0], [75.0, 125.0]], [[125.0, 75.0], [125.0, 125.0]]])
-    out = erase_mask(HashGrid(3, np.eye(3), cols, rows, crossings, 2.0, 0.3, 1.0, 0.0), d)
+    out = erase_mask(grid, d)
     assert out[100, 75] and out[75, 100]  # the lines
     assert out[24, 61] and out[30, 67]  # the flick
     assert 60 / 50 > FLICK_CELLS and not out[8, 180] and not out[20, 159]  # the longer stroke
@@ -270,17 +276,10 @@ def test_a_narrow_x_against_a_line_s_tip_stays_and_a_stroke_gone_over_goes() -> 
     and under a cell across like a flick, but it does not go on from the tip: it stays (real-like
     photo 60,131's X was erased and read empty). A second stroke along the line behind its tip (a
     line gone over twice) goes with the line."""
-    d = np.zeros((200, 200), np.float32)
-    cols = [Track(np.array([[x, 40.0], [x, 160.0]]), 1.0, 10) for x in (75.0, 125.0)]
-    rows = [Track(np.array([[40.0, y], [160.0, y]]), 1.0, 10) for y in (75.0, 125.0)]
-    for tr in cols + rows:  # the '#': cells 50 px
-        tr.dense = resample(tr.pts, 2.0)
-        cv2.line(d, tuple(int(v) for v in tr.pts[0]), tuple(int(v) for v in tr.pts[1]), 1.0, 2)
+    d, grid = _drawn_hash()
     cv2.line(d, (160, 130), (144, 172), 1.0, 2)  # a narrow X below the lower row line's right tip
     cv2.line(d, (144, 130), (160, 172), 1.0, 2)
     cv2.line(d, (130, 158), (131, 130), 1.0, 2)  # the right column gone over again near its foot
-    crossings = np.array([[[75.0, 75.0], [75.0, 125.0]], [[125.0, 75.0], [125.0, 125.0]]])
-    grid = HashGrid(3, np.eye(3), cols, rows, crossings, 2.0, 0.3, 1.0, 0.0)
     ys, xs = np.nonzero(d[128:, 138:] > 0.5)
     assert np.ptp(ys) < 50 * FLICK_CELLS  # the X is no larger than a flick, and elongated like one:
     ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(float)))

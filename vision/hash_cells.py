@@ -213,8 +213,8 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     for tr in grid.cols + grid.rows:
         p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
         cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
-        for run in (tr.dense[::-1], tr.dense):  # from the far end to the tip
-            ends.append(_tip_and_direction(run, 0.3 * cell))
+        for from_tip in (tr.dense, tr.dense[::-1]):
+            ends.append(_tip_and_direction(from_tip, 0.3 * cell))
             cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), tip_px, 1, -1)
     left = ((d > 0.6 * grid.threshold) & (out == 0)).astype(np.uint8)
     n_lab, lab = cv2.connectedComponents(left, connectivity=8)
@@ -237,14 +237,13 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     return out
 
 
-def _tip_and_direction(run: np.ndarray, back: float) -> tuple[np.ndarray, np.ndarray]:
-    """A traced line's tip (the last point of ``run``) and the unit direction in which the line
-    leaves it, from the point ``back`` px before it along the trace (the line's last stretch, not
-    one wavy step)."""
-    to_tip = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(run[::-1], axis=0).T))])
-    before = run[::-1][min(int(np.searchsorted(to_tip, back)), len(run) - 1)]
-    u = run[-1] - before
-    return run[-1], u / max(float(np.hypot(*u)), 1e-9)
+def _tip_and_direction(from_tip: np.ndarray, back: float) -> tuple[np.ndarray, np.ndarray]:
+    """A traced line's tip (the first point of ``from_tip``, its trace read from that tip) and the
+    unit direction in which the line leaves it, from the point ``back`` px along the trace (the
+    line's last stretch, not one wavy step)."""
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(from_tip, axis=0).T))])
+    u = from_tip[0] - from_tip[min(int(np.searchsorted(along, back)), len(from_tip) - 1)]
+    return from_tip[0], u / max(float(np.hypot(*u)), 1e-9)
 
 
 def _goes_on(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.ndarray]], near: float,
