@@ -78,16 +78,43 @@ def test_best_hash_equals_the_reference_on_random_tracks(seed: int) -> None:
 
 def test_random_tracks_make_hashes_to_compare() -> None:
     """The draws above are not all misses: most seeds' 3 x 3 search finds a '#', some 5 x 5 ones do,
-    and some find only choices with a line too short for its cells (the reference's -inf)."""
-    found, short = {2: 0, 4: 0}, 0
+    and some have choices whose every line is too short for its cells, which are no '#' (None), never
+    a '#' scored -inf."""
+    found, none_with_crossings = {2: 0, 4: 0}, 0
     for seed in range(40):
         fa, fb = _draw(seed)
         for k in (2, 4):
             if len(fa) >= k and len(fb) >= k:
                 best = hand_grid._best_hash(fa, fb, k, (480, 480), 0.06 * 480, 3.0)
                 found[k] += best is not None
-                short += best is not None and best[0] == -np.inf
-    assert found[2] >= 20 and found[4] >= 5 and short >= 2
+                assert best is None or np.isfinite(best[0])
+                crossed = hash_search.pairs(fa, fb, 0.06 * 480, 3.0).found
+                none_with_crossings += best is None and int(crossed.sum()) >= k * k
+    assert found[2] >= 20 and found[4] >= 5 and none_with_crossings >= 2
+
+
+def _frame(x0: float, y0: float, x1: float, y1: float) -> tuple[list[Track], list[Track]]:
+    """A rectangle's four sides (a whiteboard's frame, a photo's border) as tracks: columns, rows."""
+    cols = [Track(np.stack([np.full(12, x), np.linspace(y0, y1, 12)], 1), 1.0, 12) for x in (x0, x1)]
+    rows = [Track(np.stack([np.linspace(x0, x1, 12), np.full(12, y)], 1), 1.0, 12) for y in (y0, y1)]
+    return cols, rows
+
+
+def test_a_frame_whose_sides_span_one_cell_is_no_hash() -> None:
+    """A rectangle's sides meet at its corners: each spans the one cell between its crossings and no
+    arm - too short for a '#' line (its cells and some arm). Before stop 68 the search returned such a
+    choice scored -inf when nothing else crossed, and the reader read a whiteboard's frame around a
+    drawn '#' as the board, the whole '#' in its middle cell."""
+    cols, rows = _frame(100.0, 100.0, 380.0, 330.0)
+    for fn in (lambda: hand_grid._best_hash(cols, rows, 2, (480, 480), 0.06 * 480, 3.0),
+               lambda: hash_search.best_hash(cols, rows, 2, (480, 480), hash_search.pairs(cols, rows, 0.06 * 480,
+                                                                                           3.0))):
+        assert fn() is None
+    # the same four lines run on a cell's third past each other make a '#'
+    long_cols = [Track(np.stack([t.pts[:, 0], np.linspace(10, 420, 12)], 1), 1.0, 12) for t in cols]
+    long_rows = [Track(np.stack([np.linspace(10, 470, 12), t.pts[:, 1]], 1), 1.0, 12) for t in rows]
+    best = hand_grid._best_hash(long_cols, long_rows, 2, (480, 480), 0.06 * 480, 3.0)
+    assert best is not None and np.isfinite(best[0])
 
 
 @pytest.mark.parametrize("name, turn", [("kvuletic2_image5.jpeg", 0), ("kvuletic2_image11.jpeg", 0),

@@ -165,12 +165,11 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
             side = float(max(h, w))
             chosen = [(fa[i], la[i], pos_a[x]) for x, i in enumerate([ca[v] for v in oa])]
             chosen += [(fb[j], lb[j], pos_b[:, y]) for y, j in enumerate([cb[v] for v in ob])]
+            if any(tr.span < (k - 1 + 0.4) * cell for tr, _, _ in chosen):  # a grid line spans its cells and
+                continue  # some arm: one that does not is a frame's side seen whole, or a stroke
             score = 0.0
             missing = 0
             for tr, ln, pos in chosen:
-                if tr.span < (k - 1 + 0.4) * cell:  # a grid line spans its cells and some arm
-                    score = -math.inf
-                    break
                 score += tr.strength * min(tr.span, (k + 1.5) * cell) / side  # no more than a '#' line's length
                 for arm, end_pt in ((pos.min() - ext, tr.pts[0]), (ln - ext - pos.max(), tr.pts[-1])):
                     if arm < 0.15 * cell and not at_edge(end_pt):

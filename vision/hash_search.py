@@ -109,7 +109,7 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
     cell = v[:, m] if v.shape[1] % 2 else (v[:, m - 1] + v[:, m]) / 2
     keep &= ~(cell < 0.06 * max(h, w)) & ~(v[:, -1] > 2.6 * v[:, 0])
     score = np.zeros(len(A))
-    short = np.zeros(len(A), bool)  # a line too short for its cells: the reference's -inf, from there on
+    short = np.zeros(len(A), bool)  # a line too short for its cells and an arm: no '#' (the reference skips it)
     missing = np.zeros(len(A), np.intp)
     margin = 0.04 * max(h, w)
 
@@ -144,7 +144,7 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
         for r in np.flatnonzero(keep & ~short):
             spread = math.degrees(math.acos(float(np.clip((u[r] @ unit(u[r].sum(axis=0))).min(), -1.0, 1.0))))
             score[r] -= 0.02 * max(0.0, spread - HUE_DEG)
-    score = np.where(short, -math.inf, score)
+    keep &= ~short
     if not keep.any():
         return None
     r = int(np.flatnonzero(keep)[np.argmax(score[keep])])
