@@ -169,6 +169,36 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
         BoardReader(size=3).read(sc.image)
 
 
+def on_a_dark_table(img: np.ndarray, grow: float, seed: int) -> np.ndarray:
+    """Photo ``img`` lying on a dark grey table with a phone's sensor noise (3 grey levels), the
+    frame ``grow`` times as large, its edge blended over 8 px."""
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    H, W = int(h * grow), int(w * grow)
+    table = np.clip(np.float32(40.0) + rng.normal(0.0, 3.0, (H, W, 3)), 0, 255).astype(np.float32)
+    y, x = int(rng.uniform(0.05, grow - 1.05) * h), int(rng.uniform(0.05, grow - 1.05) * w)
+    page = np.zeros((H, W), np.float32)
+    page[y:y + h, x:x + w] = 1.0
+    page = cv2.GaussianBlur(page, (0, 0), 8.0)[..., None]
+    photo = table.copy()
+    photo[y:y + h, x:x + w] = img
+    return (table * (1.0 - page) + photo * page).astype(np.uint8)
+
+
+def test_a_photo_on_a_dark_noisy_table_reads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A dark table's sensor noise, divided by its little light, looked like ink: tracks along the
+    page's edge were taken for the '#''s lines (image6 on a table 40 grey levels dark read
+    ``...|X..|...``). On a background under ``ink.DIM_BACKGROUND`` of the page's white the ink map is 0."""
+    name = "kvuletic2_image6.jpeg"
+    img = on_a_dark_table(read_image(DATA / name), 1.3, 11)
+    d = ink.ink_map(img)
+    assert float(d[:8, :8].max()) == 0.0 and float(d.max()) > 0.3  # the table holds no ink; the page does
+    assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
+    monkeypatch.setattr(ink, "DIM_BACKGROUND", 0.0)  # the table's noise as ink: the page's edge a line
+    assert float(ink.ink_map(img)[:8, :8].max()) > 0.05
+    assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
+
+
 def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
     four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a

@@ -11,8 +11,8 @@ import numpy as np
 
 from .errors import VisionError
 
-__all__ = ["ink_map", "ink_colour", "ink_threshold", "noise_floor_and_top", "local_ink_threshold", "ink_mask",
-           "median_at", "colour_at", "angle_deg", "unit", "noise_sigma", "denoised", "NOISY_SIGMA"]
+__all__ = ["DIM_BACKGROUND", "ink_map", "ink_colour", "ink_threshold", "noise_floor_and_top", "local_ink_threshold",
+           "ink_mask", "median_at", "colour_at", "angle_deg", "unit", "noise_sigma", "denoised", "NOISY_SIGMA"]
 
 
 def _apply(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -37,7 +37,9 @@ def ink_map(image: object, stroke_px: float = 12.0) -> np.ndarray:
     The background is a grey closing (max then min filter) over a square a little wider
     than ``stroke_px``, the widest stroke expected: it removes thin dark strokes and keeps
     anything wide - light gradients, shadows, glare, and the table around the paper, whose
-    edge therefore does not turn into a line of ink.
+    edge therefore does not turn into a line of ink. Where that background is darker than
+    :data:`DIM_BACKGROUND` of the page's white (a dark table), the darkness is 0: a page is
+    never that dark, and the sensor's noise there, divided by so little light, looks like ink.
     """
     return _darkness(cv2.cvtColor(_as_rgb(image), cv2.COLOR_RGB2GRAY), stroke_px)
 
@@ -48,6 +50,12 @@ def ink_colour(image: object, stroke_px: float = 12.0) -> np.ndarray:
     colour whatever the stroke's coverage: a thin or pale stroke scales all three alike (black
     ink darkens them equally, blue ink mostly red and green, a green marker red and blue)."""
     return _darkness(np.ascontiguousarray(_as_rgb(image)), stroke_px)  # the three channels in one pass
+
+
+#: A background darker than this share of the page's white (the 95th percentile of the map's
+#: background) holds no ink: its darkness is 0 (stop 68; the 15 real photos on a dark, noisy table
+#: read 46 -> 54 of 60 in four such scenes, the real-like sets as before or better).
+DIM_BACKGROUND = 0.3
 
 
 def _darkness(y8: np.ndarray, stroke_px: float) -> np.ndarray:
@@ -61,7 +69,11 @@ def _darkness(y8: np.ndarray, stroke_px: float) -> np.ndarray:
     # (cv2.max: numpy's is 6x slower on uint8; on one channel, where a scalar means every value)
     floor = cv2.max(bg.reshape(bg.shape[0], -1), 8).reshape(bg.shape)
     np.divide(d, floor.astype(np.float32), out=d)
-    return np.subtract(1.0, d, out=d)
+    np.subtract(1.0, d, out=d)
+    # no page is that dark: on a background under DIM_BACKGROUND of the page's white (a dark table, a
+    # cloth, the room behind) the sensor's noise, divided by so little light, looked like ink
+    d[bg < DIM_BACKGROUND * float(np.percentile(bg[::4, ::4], 95))] = 0.0
+    return d
 
 
 #: The noise (:func:`noise_sigma`, grey levels) above which the reader smooths a photo first.
