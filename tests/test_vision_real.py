@@ -199,6 +199,26 @@ def test_a_photo_on_a_dark_noisy_table_reads(monkeypatch: pytest.MonkeyPatch) ->
     assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
+def under_a_hand_s_shadow(img: np.ndarray, light: float, seed: int) -> np.ndarray:
+    """Photo ``img`` with a hand's soft-edged shadow rising from the bottom edge, ``light`` of the
+    light left in it."""
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    m = np.ones((h, w), np.float32)
+    cv2.ellipse(m, (int(rng.uniform(0.2, 0.8) * w), int(1.05 * h)), (int(0.25 * w), int(0.45 * h)),
+                float(rng.uniform(-30, 30)), 0, 360, light, -1)
+    return np.clip(img * cv2.GaussianBlur(m, (0, 0), 6.0)[..., None], 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("name, seed", [("kvuletic2_image10.jpeg", 1), ("kvuletic2_image14.jpeg", 5)])
+def test_a_pen_under_a_hand_s_deep_shadow_is_ink(name: str, seed: int) -> None:
+    """Under a shadow leaving a quarter of the light the background is dim too, but quiet: the pen's
+    strokes there stand above its own noise and stay ink (a plain cut of dim backgrounds lost them:
+    these two read empty or wrong)."""
+    img = under_a_hand_s_shadow(read_image(DATA / name), 0.25, seed)
+    assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
+
+
 def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
     four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a
