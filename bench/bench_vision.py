@@ -304,6 +304,38 @@ def turned_whole(img: np.ndarray, deg: float) -> np.ndarray:
     return cv2.warpAffine(img, M, (nw, nh), borderMode=cv2.BORDER_REPLICATE)
 
 
+def on_a_dark_table(img: np.ndarray, grow: float, seed: int) -> np.ndarray:
+    """Photo ``img`` lying on a dark grey table (40 grey levels) with a phone's sensor noise (3 grey
+    levels), the frame ``grow`` times as large, the photo's edge blended over 8 px: a held-out
+    condition of :func:`_photo_conditions`, and a real test's."""
+    import cv2
+
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    H, W = int(h * grow), int(w * grow)
+    table = np.clip(np.float32(40.0) + rng.normal(0.0, 3.0, (H, W, 3)), 0, 255).astype(np.float32)
+    y, x = int(rng.uniform(0.05, grow - 1.05) * h), int(rng.uniform(0.05, grow - 1.05) * w)
+    page = np.zeros((H, W), np.float32)
+    page[y:y + h, x:x + w] = 1.0
+    page = cv2.GaussianBlur(page, (0, 0), 8.0)[..., None]
+    photo = table.copy()
+    photo[y:y + h, x:x + w] = img
+    return (table * (1.0 - page) + photo * page).astype(np.uint8)
+
+
+def under_a_hand_s_shadow(img: np.ndarray, light: float, seed: int) -> np.ndarray:
+    """Photo ``img`` with a hand's soft-edged shadow rising from the bottom edge, ``light`` of the
+    light left in it: a held-out condition of :func:`_photo_conditions`, and a real test's."""
+    import cv2
+
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    m = np.ones((h, w), np.float32)
+    cv2.ellipse(m, (int(rng.uniform(0.2, 0.8) * w), int(1.05 * h)), (int(0.25 * w), int(0.45 * h)),
+                float(rng.uniform(-30, 30)), 0, 360, light, -1)
+    return np.clip(img * cv2.GaussianBlur(m, (0, 0), 6.0)[..., None], 0, 255).astype(np.uint8)
+
+
 def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:
     """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
     ``(label, transform(img, i), readings(board))``; ``readings``: the board texts that count as
@@ -356,6 +388,10 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
              _as_labelled),
             ("JPEG quality 25", lambda img, i: jpeg(img, 25), _as_labelled),
             ("a hard shadow across", lambda img, i: shadow(img), _as_labelled),
+            ("a hand's shadow leaving 25 % of the light", lambda img, i: under_a_hand_s_shadow(img, 0.25, i),
+             _as_labelled),
+            ("on a dark noisy table, the frame 1.3 x as large", lambda img, i: on_a_dark_table(img, 1.3, i),
+             _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
                 1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), _as_labelled),
             ("turned 10 deg", lambda img, i: turned(img, 10.0), _as_labelled),
@@ -384,8 +420,8 @@ def real_photos(repeat: int = 1, accept: float | None = None) -> None:
     """The 15 real dev photos (``tests/data/real``, labelled by eye): cells and boards right,
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
     4,000 px phone photo (the reader works at one scale whatever the camera), and under the
-    conditions of :func:`_photo_conditions` (noise, keystone, blur, JPEG, shadow, light, turned
-    10 deg in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
+    conditions of :func:`_photo_conditions` (noise, keystone, blur, JPEG, shadows, light, a dark table,
+    turned 10 deg in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
     import json
     from pathlib import Path
 

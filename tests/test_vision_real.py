@@ -169,28 +169,12 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
         BoardReader(size=3).read(sc.image)
 
 
-def on_a_dark_table(img: np.ndarray, grow: float, seed: int) -> np.ndarray:
-    """Photo ``img`` lying on a dark grey table with a phone's sensor noise (3 grey levels), the
-    frame ``grow`` times as large, its edge blended over 8 px."""
-    h, w = img.shape[:2]
-    rng = np.random.default_rng(seed)
-    H, W = int(h * grow), int(w * grow)
-    table = np.clip(np.float32(40.0) + rng.normal(0.0, 3.0, (H, W, 3)), 0, 255).astype(np.float32)
-    y, x = int(rng.uniform(0.05, grow - 1.05) * h), int(rng.uniform(0.05, grow - 1.05) * w)
-    page = np.zeros((H, W), np.float32)
-    page[y:y + h, x:x + w] = 1.0
-    page = cv2.GaussianBlur(page, (0, 0), 8.0)[..., None]
-    photo = table.copy()
-    photo[y:y + h, x:x + w] = img
-    return (table * (1.0 - page) + photo * page).astype(np.uint8)
-
-
-def test_a_photo_on_a_dark_noisy_table_reads(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_photo_on_a_dark_noisy_table_reads(bench_vision: ModuleType, monkeypatch: pytest.MonkeyPatch) -> None:
     """A dark table's sensor noise, divided by its little light, looked like ink: tracks along the
     page's edge were taken for the '#''s lines (image6 on a table 40 grey levels dark read
     ``...|X..|...``). On a background under ``ink.DIM_BACKGROUND`` of the page's white the ink map is 0."""
     name = "kvuletic2_image6.jpeg"
-    img = on_a_dark_table(read_image(DATA / name), 1.3, 11)
+    img = bench_vision.on_a_dark_table(read_image(DATA / name), 1.3, 11)
     d = ink.ink_map(img)
     assert float(d[:8, :8].max()) == 0.0 and float(d.max()) > 0.3  # the table holds no ink; the page does
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
@@ -199,23 +183,12 @@ def test_a_photo_on_a_dark_noisy_table_reads(monkeypatch: pytest.MonkeyPatch) ->
     assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
-def under_a_hand_s_shadow(img: np.ndarray, light: float, seed: int) -> np.ndarray:
-    """Photo ``img`` with a hand's soft-edged shadow rising from the bottom edge, ``light`` of the
-    light left in it."""
-    h, w = img.shape[:2]
-    rng = np.random.default_rng(seed)
-    m = np.ones((h, w), np.float32)
-    cv2.ellipse(m, (int(rng.uniform(0.2, 0.8) * w), int(1.05 * h)), (int(0.25 * w), int(0.45 * h)),
-                float(rng.uniform(-30, 30)), 0, 360, light, -1)
-    return np.clip(img * cv2.GaussianBlur(m, (0, 0), 6.0)[..., None], 0, 255).astype(np.uint8)
-
-
 @pytest.mark.parametrize("name, seed", [("kvuletic2_image10.jpeg", 1), ("kvuletic2_image14.jpeg", 5)])
-def test_a_pen_under_a_hand_s_deep_shadow_is_ink(name: str, seed: int) -> None:
+def test_a_pen_under_a_hand_s_deep_shadow_is_ink(bench_vision: ModuleType, name: str, seed: int) -> None:
     """Under a shadow leaving a quarter of the light the background is dim too, but quiet: the pen's
     strokes there stand above its own noise and stay ink (a plain cut of dim backgrounds lost them:
     these two read empty or wrong)."""
-    img = under_a_hand_s_shadow(read_image(DATA / name), 0.25, seed)
+    img = bench_vision.under_a_hand_s_shadow(read_image(DATA / name), 0.25, seed)
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
