@@ -3,35 +3,29 @@ call every cell empty, X or O with a confidence. OpenCV + numpy only.
 
 Pipeline of :class:`BoardReader` (every frame from scratch: the paper may move):
 
-1. **Ink map.** Luma darkness against the local background, ``1 - Y / background(Y)``,
-   with the background a morphological closing of a shrunk copy (removes strokes, keeps
-   light gradients, shadows and glare). Luma makes every pen colour dark and a yellow
-   highlighter nearly invisible; normalising by the background makes the map independent
-   of uneven light. A photo with sensor noise is smoothed first (:func:`~kinegym.vision.ink.denoised`).
+1. **Ink map** (:func:`~kinegym.vision.ink.ink_map`). Luma darkness against the local
+   background, ``1 - Y / background(Y)``, the background a morphological closing (removes
+   strokes, keeps light gradients, shadows and glare): every pen colour is dark, a yellow
+   highlighter nearly invisible, uneven light undone. A noisy photo is smoothed first.
 2. **Grid.** Long straight segments (probabilistic Hough on the thresholded map) are
    merged into lines, split into the two families of the grid by direction (perspective
    lets each family fan out), and ordered across. The longest lines of each family are
    the field's; a family's outermost line is a *frame* line when the other family stops
-   at it, an *interior* line when the other family runs on for about a cell - so an
-   interior-only field (the thesis's 4 + 4 lines), a full frame and a frame with sides
-   missing all work. The board size follows from the number of interior lines, or is
-   given.
+   at it, an *interior* line when the other family runs on for about a cell (interior-only
+   fields, full frames, frames with sides missing). The board size follows from the number
+   of interior lines, or is given.
 3. **Homography.** Every intersection of a column line with a row line is a point of the
-   ideal grid; a least-squares homography maps grid coordinates (cells) to pixels. Its
-   reprojection error and the count of grid points found are the grid's confidence. A
-   lattice whose cells grow more than 3 x from one corner of the field to another (a camera
-   tilted 35 deg manages about 2.6 x) was extrapolated from wrong lines: the next lattice
-   hypothesis is tried instead.
+   ideal grid; a least-squares homography maps grid coordinates (cells) to pixels (its
+   reprojection error and the grid points found: the grid's confidence). A lattice whose
+   cells grow more than 3 x across the field (a camera tilted 35 deg: 2.6 x) was
+   extrapolated from wrong lines: the next lattice hypothesis is tried instead.
 4. **Cells.** The ink map is warped onto a square grid of ``cell_px`` per cell, the grid
-   lines are masked out, and each cell's ink is measured: its amount (empty or not,
-   against a threshold set from the contrast of the grid lines themselves, so faint
-   ghosts of erased games fall below it), and two shape features that do not depend on
-   the symbol's rotation, size or placement in the cell - ink at the centre of the mark
-   (an X crosses there, an O is hollow) and an enclosed hole (an O encloses one, an X
-   does not). A logistic rule turns them into probabilities; a small trained convolutional
-   network (:mod:`~kinegym.vision.cell_model`, shipped with the package, run in numpy) reads
-   the cell's window of ink and those features and gives the calibrated probabilities the
-   reader returns (``model=None`` keeps the rule's).
+   lines are masked out, and each cell's ink is measured: its amount (against a threshold
+   set from the grid lines' own contrast: faint ghosts of erased games fall below it), ink
+   at the centre of the mark (an X crosses there, an O is hollow) and an enclosed hole. A
+   logistic rule turns them into probabilities; a small trained convolutional network
+   (:mod:`~kinegym.vision.cell_model`, shipped, run in numpy) reads the cell's window of ink
+   and those features and gives the calibrated probabilities returned (``model=None``: the rule's).
 
 **Hand-drawn grids.** A real person's '#' (wavy, converging lines, no frame, one line
 stopping at a crossing, pale or coloured pen) is looked for as a hand-drawn '#'
@@ -48,7 +42,8 @@ middle one).
 trained :class:`~kinegym.vision.grid_choice.GridArbiter` gives each the probability that it
 reads the board right. The first that reaches its accept level is taken, else the most
 probable made (on rendered and lab boards the straight field is taken at once). A lower accept
-level (``BoardReader(accept=...)``) makes fewer hypotheses: faster, less often right.
+level (``BoardReader(accept=...)``) makes fewer hypotheses: faster, less often right. An unsure
+reading of a field small in the photo is read again on a crop around it (:mod:`~kinegym.vision.zoom`).
 
 Rows are returned top to bottom and columns left to right *as the image shows them*
 (a board turned more than 45 degrees reads turned). :class:`ThresholdReader` keeps seed
@@ -88,6 +83,7 @@ from .hash_cells import SearchCopy, line_contrast, read_hash
 from .ink import NOISY_SIGMA, _apply, _as_rgb, denoised, ink_map, noise_sigma
 from .reading import EMPTY, BoardReading, O, X
 from .threshold_reader import ThresholdReader
+from .zoom import second_look
 
 __all__ = ["EMPTY", "X", "O", "BoardReading", "BoardReader", "ThresholdReader", "NoBoardError", "VisionError",
            "ink_map", "board_features", "debug_image"]
@@ -113,12 +109,14 @@ class BoardReader:
             [0, 1]: lower reads faster and less often right (0: the first grid found; 1: every
             hypothesis made; bench/README.md "Speed against boards" measures the trade), None the
             arbiter's own level (``arbiter.accept``, chosen when it was trained).
+        zoom: read an unsure reading of a field small in the photo again on a crop around it
+            (:mod:`~kinegym.vision.zoom`; slower on such photos, more often right).
     """
 
     def __init__(self, size: int | None = None, cell_px: int = 40, max_side_px: int = 800,
                  grid_px: int = 400, model: CellModel | CellEnsemble | str | Sequence[str] | None = "shipped",
                  arbiter: GridArbiter | str | None = "shipped", counts: str = "alternate",
-                 accept: float | None = None) -> None:
+                 accept: float | None = None, zoom: bool = True) -> None:
         if size not in (None, 3, 5):
             raise VisionError(f"size={size!r}; expected 3, 5 or None (decide from the image)")
         if not 12 <= int(cell_px) <= 200:  # a grid line's band (a fifth of a cell) must fit in the margin
@@ -140,7 +138,7 @@ class BoardReader:
         if accept is not None and not (isinstance(accept, (int, float)) and 0.0 <= accept <= 1.0):
             raise VisionError(f"accept={accept!r}; expected a probability in [0, 1] (0: the first grid found, "
                               "1: every hypothesis) or None (the arbiter's own level)")
-        self.accept = None if accept is None else float(accept)
+        self.accept, self.zoom = (None if accept is None else float(accept)), bool(zoom)
 
     def read(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
         """Read one image (uint8 RGB or grey); raises :class:`NoBoardError` without a board.
@@ -149,9 +147,19 @@ class BoardReader:
         coordinates of the possibly shrunk working image (``trace["scale"]``), for :func:`debug_image`,
         ``trace["hypotheses"]``: each grid tried, (kind, probability), ``trace["kind"]``: the one read,
         ``trace["noise"]``: the photo's noise estimate (smoothed first above ``NOISY_SIGMA``), and
-        ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise."""
+        ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise. With
+        ``zoom``, an unsure reading of a small field is read again on a crop around it
+        (:func:`~kinegym.vision.zoom.second_look`; ``trace["zoom"]``: the crop box)."""
+        reading = self._read_once(image, trace)
+        return second_look(self._read_once, _as_rgb(image), reading, self._accept(), trace) if self.zoom else reading
+
+    def _accept(self) -> float:
+        return self.accept if self.accept is not None else self.arbiter.accept if self.arbiter is not None else 0.0
+
+    def _read_once(self, image: object, trace: dict[str, object] | None = None) -> BoardReading:
+        """:meth:`read` without the second look."""
         made, reasons = [], []
-        accept = self.accept if self.accept is not None else self.arbiter.accept if self.arbiter is not None else 0.0
+        accept = self._accept()
         for hyp in self._hypotheses(image, reasons, trace):
             made.append(hyp)
             if hyp.p >= accept:  # (without an arbiter every p is 1: the first grid found)

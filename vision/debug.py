@@ -18,24 +18,26 @@ def debug_image(image: object, reading: BoardReading | None, trace: dict[str, ob
     rows blue, others grey), the lattice crossings it used, the field it fitted (green) and
     each cell's call with its confidence (orange with a star where the count rule called the cell
     otherwise than its own most probable call), the grid's confidence and the kind of grid
-    hypothesis read at the top left (red: an unsure grid) - or, without a board, the reason in red."""
+    hypothesis read at the top left (red: an unsure grid) - or, without a board, the reason in red. A
+    reading taken from a crop (:mod:`~kinegym.vision.zoom`) is drawn where the crop lies (``trace["offset"]``)."""
     img = _as_rgb(image).copy()
     k = 1.0 / float(trace.get("scale", 1.0))  # type: ignore[arg-type]
+    o = np.asarray(trace.get("offset", (0.0, 0.0)), np.float64)  # a crop's corner (a second look's reading)
     for key, colour in (("lines", (150, 150, 150)), ("cols", (255, 40, 40)), ("rows", (40, 90, 255))):
         for ln in trace.get(key, []):  # type: ignore[union-attr]
-            cv2.line(img, tuple(np.rint(ln.p0 * k).astype(int)), tuple(np.rint(ln.p1 * k).astype(int)), colour, 2,
-                     cv2.LINE_AA)
+            cv2.line(img, tuple(np.rint(ln.p0 * k + o).astype(int)), tuple(np.rint(ln.p1 * k + o).astype(int)),
+                     colour, 2, cv2.LINE_AA)
     if "hash_to_image" in trace:  # a hand-drawn '#': its traced lines (columns red, rows blue)
         T = trace["hash_to_image"]
         grid = trace["hash"]
         for tracks, colour in ((grid.cols, (255, 40, 40)), (grid.rows, (40, 90, 255))):  # type: ignore[union-attr]
             for tr in tracks:
-                p = np.rint(_apply(T, tr.dense) * 4).astype(np.int32)  # type: ignore[arg-type]
+                p = np.rint((_apply(T, tr.dense) + o) * 4).astype(np.int32)  # type: ignore[arg-type]
                 cv2.polylines(img, [p], False, colour, 2, cv2.LINE_AA, shift=2)
-        for p in _apply(T, grid.crossings.reshape(-1, 2)):  # type: ignore[union-attr, arg-type]
+        for p in _apply(T, grid.crossings.reshape(-1, 2)) + o:  # type: ignore[union-attr, arg-type]
             cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
     elif "lattice" in trace and "nodes" in trace:
-        for p in _apply(trace["lattice"], trace["nodes"].astype(float)) * k:  # type: ignore[union-attr, arg-type]
+        for p in _apply(trace["lattice"], trace["nodes"].astype(float)) * k + o:  # type: ignore[union-attr, arg-type]
             cv2.circle(img, tuple(np.rint(p).astype(int)), 4, (255, 200, 0), -1, cv2.LINE_AA)
     if reading is not None:
         n, H = reading.n, reading.homography
