@@ -55,7 +55,7 @@ def ink_colour(image: object, stroke_px: float = 12.0) -> np.ndarray:
 
 #: A background darker than this share of the page's white (the 95th percentile of the map's
 #: background) is dim: there ink must stand above the dim parts' own noise (their median darkness + 6
-#: robust sigmas), else its darkness is 0 (stop 68: the 15 real photos on a dark, noisy table read 46 ->
+#: robust sigmas), else its darkness is 0 (stop 68: the 15 real photos on a dark, noisy table read 42 ->
 #: 54 of 60 in four such scenes, and under a hand's shadow at 25 % all 15 as before).
 DIM_BACKGROUND = 0.3
 
