@@ -171,8 +171,9 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
 
 def test_a_photo_on_a_dark_noisy_table_reads(bench_vision: ModuleType, monkeypatch: pytest.MonkeyPatch) -> None:
     """A dark table's sensor noise, divided by its little light, looked like ink: tracks along the
-    page's edge were taken for the '#''s lines (image6 on a table 40 grey levels dark read
-    ``...|X..|...``). On a background under ``ink.DIM_BACKGROUND`` of the page's white the ink map is 0."""
+    page's edge were taken for the '#''s lines (stop 67's reader read image6 on a table 40 grey levels
+    dark as ``...|.X.|...``). On a background under ``ink.DIM_BACKGROUND`` of the page's white only what
+    stands above the dim parts' own noise is ink: on the table, nothing."""
     name = "kvuletic2_image6.jpeg"
     img = bench_vision.on_a_dark_table(read_image(DATA / name), 1.3, 11)
     d = ink.ink_map(img)

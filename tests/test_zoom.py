@@ -31,9 +31,9 @@ def test_the_crop_is_the_field_and_half_its_side_around_it() -> None:
     assert crop_box(_reading(200.0, 20.0, 30.0), (800, 1000, 3))[:2] == (0, 0)  # clipped to the photo
     assert crop_box(_reading(ZOOM_FIELD * 800 + 1, 10.0, 10.0), (800, 1000, 3)) is None  # a field filling the frame
     assert crop_box(_reading(30.0, 10.0, 10.0), (800, 1000, 3)) is None  # a crop under 64 px: nothing to read
-    turned = _reading(200.0, 300.0, 250.0)
-    turned.homography[2, 0] = np.nan
-    assert crop_box(turned, (800, 1000, 3)) is None
+    broken = _reading(200.0, 300.0, 250.0)  # a homography with no finite field
+    broken.homography[2, 0] = np.nan
+    assert crop_box(broken, (800, 1000, 3)) is None
 
 
 def test_a_sure_reading_or_a_crop_that_reads_nothing_keeps_the_first() -> None:
