@@ -138,13 +138,13 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
     outside = (pos_a < ext - 2).sum(axis=(1, 2)) + (pos_b < ext - 2).sum(axis=(1, 2))
     score = score - 0.1 * outside
     score = score - 0.3 * ratio
+    keep &= ~short
     if fa[0].colour is not None:  # one pen draws a '#': lines of another colour are something else
         hue = np.array([t.colour for t in fa + fb])
         u = hue[np.concatenate([A0, len(fa) + B0], axis=1)]  # (N, 2k, 3)
-        for r in np.flatnonzero(keep & ~short):
+        for r in np.flatnonzero(keep):
             spread = math.degrees(math.acos(float(np.clip((u[r] @ unit(u[r].sum(axis=0))).min(), -1.0, 1.0))))
             score[r] -= 0.02 * max(0.0, spread - HUE_DEG)
-    keep &= ~short
     if not keep.any():
         return None
     r = int(np.flatnonzero(keep)[np.argmax(score[keep])])

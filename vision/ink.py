@@ -74,11 +74,11 @@ def _darkness(y8: np.ndarray, stroke_px: float) -> np.ndarray:
     np.subtract(1.0, d, out=d)
     # where the background is dim (a dark table, the room behind, a hand's deep shadow) the sensor's noise,
     # divided by so little light, looks like ink: there ink must stand above the dim parts' own noise
-    dim = bg < DIM_BACKGROUND * float(np.percentile(bg[::4, ::4], 95))
-    sample = d[::4, ::4][dim[::4, ::4]]
+    level = DIM_BACKGROUND * float(np.percentile(bg[::4, ::4], 95))
+    sample = d[::4, ::4][bg[::4, ::4] < level]  # (the full-size mask only where there are dim parts)
     if sample.size >= 50:
         med = float(np.median(sample))
-        d[dim & (d < med + 6.0 * 1.4826 * float(np.median(np.abs(sample - med))))] = 0.0
+        d[(bg < level) & (d < med + 6.0 * 1.4826 * float(np.median(np.abs(sample - med))))] = 0.0
     return d
 
 
