@@ -392,6 +392,8 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
              _as_labelled),
             ("on a dark noisy table, the frame 1.3 x as large", lambda img, i: on_a_dark_table(img, 1.3, i),
              _as_labelled),
+            ("a faint pen: washed out to 35 % of the contrast", lambda img, i: np.clip(
+                255 - 0.35 * (255 - img.astype(np.float32)), 0, 255).astype(np.uint8), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
                 1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), _as_labelled),
             ("turned 10 deg", lambda img, i: turned(img, 10.0), _as_labelled),
