@@ -336,6 +336,21 @@ def under_a_hand_s_shadow(img: np.ndarray, light: float, seed: int) -> np.ndarra
     return np.clip(img * cv2.GaussianBlur(m, (0, 0), 6.0)[..., None], 0, 255).astype(np.uint8)
 
 
+def with_a_pen_beside(img: np.ndarray, seed: int) -> np.ndarray:
+    """Photo ``img`` with a dark pen lying on the page beside the board: a bar along the top or the
+    bottom edge, 45 % of the photo's width long and a 45th of it thick (2.5 times the '#''s strokes
+    in the real photos), slightly tilted: a held-out condition of :func:`_photo_conditions`, and a
+    real test's."""
+    import cv2
+
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    out = img.copy()
+    y, x = int(rng.choice([0.06, 0.94]) * h), int(rng.uniform(0.05, 0.4) * w)
+    cv2.line(out, (x, y), (x + int(0.45 * w), y + int(rng.uniform(-0.04, 0.04) * h)), (20, 20, 30), max(6, w // 45))
+    return out
+
+
 def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:
     """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
     ``(label, transform(img, i), readings(board))``; ``readings``: the board texts that count as
@@ -392,6 +407,7 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
              _as_labelled),
             ("on a dark noisy table, the frame 1.3 x as large", lambda img, i: on_a_dark_table(img, 1.3, i),
              _as_labelled),
+            ("a dark pen lying beside the board", lambda img, i: with_a_pen_beside(img, i), _as_labelled),
             ("a faint pen: washed out to 35 % of the contrast", lambda img, i: np.clip(
                 255 - 0.35 * (255 - img.astype(np.float32)), 0, 255).astype(np.uint8), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(

@@ -215,6 +215,22 @@ def test_a_pen_under_a_hand_s_deep_shadow_is_ink(bench_vision: ModuleType, name:
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
+@pytest.mark.parametrize("name, seed", [("kvuletic2_image3.jpeg", 8), ("kvuletic2_image4.jpeg", 9)])
+def test_a_pen_lying_beside_the_board_is_no_line_direction(bench_vision: ModuleType, name: str, seed: int,
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """A dark pen along the page's edge is the longest, darkest straight thing in view: the strongest
+    line direction, with the '#''s rows within 40 deg of it never tried. It is thick ink (it holds a
+    square two stroke widths wide), so the directions are sought again in the thin ink alone and
+    the board reads; without that (:data:`tracks.THICK_SHARE` past 1) it is refused or read wrong."""
+    from kinegym.vision import tracks
+
+    img = bench_vision.with_a_pen_beside(read_image(DATA / name), seed)
+    assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
+    monkeypatch.setattr(tracks, "THICK_SHARE", 2.0)
+    with contextlib.suppress(NoBoardError):
+        assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
+
+
 def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
     four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a

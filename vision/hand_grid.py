@@ -56,7 +56,7 @@ from .hash_search import best_hash, pairs
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
 from .polylines import all_crossings, extend, first_crossing, prepare
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
-from .tracks import Track, _dense, _directions, _sharing, _tracks
+from .tracks import Track, _dense, _line_directions, _sharing, _tracks
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
 
@@ -250,7 +250,7 @@ def _find_hash_grid(d: np.ndarray, sizes: tuple[int, ...], share: float, colour:
     owns: list[Ruling] = []  # the rulings found along each pair of directions
     tried = [_try(_hash_along, d, sizes, share, colour, above, ruling, mask, traced, t, width, phi_a, phi_b,
                   other_colour, owns)
-             for phi_a, phi_b in _directions(mask, width)]  # a rival second direction is tried too: the better wins
+             for phi_a, phi_b in _line_directions(mask, width)]  # rival directions are tried too: the better wins
     if rulings is not None and ruling is None:
         rulings[level] = owns
     return _best(tried)
