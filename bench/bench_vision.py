@@ -336,11 +336,17 @@ def under_a_hand_s_shadow(img: np.ndarray, light: float, seed: int) -> np.ndarra
     return np.clip(img * cv2.GaussianBlur(m, (0, 0), 6.0)[..., None], 0, 255).astype(np.uint8)
 
 
+def washed_out(img: np.ndarray, contrast: float) -> np.ndarray:
+    """Photo ``img`` at ``contrast`` of its contrast against white (a faint pen, or the light washing
+    the photo out): a held-out condition of :func:`_photo_conditions`, and real tests'."""
+    return np.clip(255 - (255 - img.astype(np.float64)) * contrast, 0, 255).astype(np.uint8)
+
+
 def with_a_pen_beside(img: np.ndarray, seed: int) -> np.ndarray:
     """Photo ``img`` with a dark pen lying on the page beside the board: a bar along the top or the
-    bottom edge, 45 % of the photo's width long and a 45th of it thick (2.5 times the '#''s strokes
-    in the real photos), slightly tilted: a held-out condition of :func:`_photo_conditions`, and a
-    real test's."""
+    bottom edge, 45 % of the photo's width long and a 45th of it thick (2.5-5 times the '#''s
+    strokes in the real photos), slightly tilted: a held-out condition of :func:`_photo_conditions`,
+    and a real test's."""
     import cv2
 
     h, w = img.shape[:2]
@@ -408,8 +414,7 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
             ("on a dark noisy table, the frame 1.3 x as large", lambda img, i: on_a_dark_table(img, 1.3, i),
              _as_labelled),
             ("a dark pen lying beside the board", lambda img, i: with_a_pen_beside(img, i), _as_labelled),
-            ("a faint pen: washed out to 35 % of the contrast", lambda img, i: np.clip(
-                255 - 0.35 * (255 - img.astype(np.float32)), 0, 255).astype(np.uint8), _as_labelled),
+            ("a faint pen: washed out to 35 % of the contrast", lambda img, i: washed_out(img, 0.35), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
                 1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), _as_labelled),
             ("turned 10 deg", lambda img, i: turned(img, 10.0), _as_labelled),
