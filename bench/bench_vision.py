@@ -357,6 +357,47 @@ def with_a_pen_beside(img: np.ndarray, seed: int) -> np.ndarray:
     return out
 
 
+def highlighted(img: np.ndarray, seed: int) -> np.ndarray:
+    """Photo ``img`` with a green highlighter scribbled across the board: a zigzag a 22nd of the
+    width thick, multiplied over the photo as a highlighter's dye is: a held-out condition of
+    :func:`_photo_conditions`."""
+    import cv2
+
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    x0 = rng.uniform(0.1, 0.3) * w
+    pts = [(int(x0 + k * 0.12 * w), int(((0.3 if k % 2 else 0.7) + rng.uniform(-0.1, 0.1)) * h)) for k in range(6)]
+    m = np.zeros((h, w), np.uint8)
+    cv2.polylines(m, [np.array(pts, np.int32)], False, 255, max(8, w // 22))
+    dye = cv2.GaussianBlur(m, (0, 0), 1.5)[..., None].astype(np.float64) / 255
+    return np.clip(img * (1 - dye * (1 - np.array([190, 255, 90]) / 255)), 0, 255).astype(np.uint8)
+
+
+def cut_off_at_top(img: np.ndarray, cells: float = 0.75) -> np.ndarray:
+    """Photo ``img`` cut off ``cells`` of a cell above the '#''s top row line, where the column lines
+    still run on: the field as read on the photo as taken (each of the 15 read right there, as
+    ``tests/test_vision_real.py`` asserts): a held-out condition of :func:`_photo_conditions`."""
+    H = BoardReader(size=3).read(img).homography
+    top = [H @ [u, 1.0 - cells, 1.0] for u in (0.0, 1.5, 3.0)]
+    return np.ascontiguousarray(img[max(0, int(min(p[1] / p[2] for p in top))):])
+
+
+def beside_a_second_board(img: np.ndarray) -> np.ndarray:
+    """Photo ``img`` with a second, smaller board half in view beside it: the canvas grown by half its
+    width, where the photo mirrored at 0.7 of its size shows its left half (the board's other
+    side): a held-out condition of :func:`_photo_conditions`."""
+    import cv2
+
+    h, w = img.shape[:2]
+    other = cv2.resize(np.ascontiguousarray(img[:, ::-1]), (int(0.7 * w), int(0.7 * h)), interpolation=cv2.INTER_AREA)
+    out = np.empty((h, w + w // 2, 3), np.uint8)
+    out[:] = np.median(img.reshape(-1, 3), axis=0).astype(np.uint8)
+    out[:, :w] = img
+    y = (h - other.shape[0]) // 2
+    out[y:y + other.shape[0], w:] = other[:, :w // 2]
+    return out
+
+
 def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarray], Callable[[str], list[str]]]]:
     """How held-out phone photos differ from the 15 real ones, as transforms of photo ``i``:
     ``(label, transform(img, i), readings(board))``; ``readings``: the board texts that count as
@@ -415,6 +456,9 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
              _as_labelled),
             ("a dark pen lying beside the board", lambda img, i: with_a_pen_beside(img, i), _as_labelled),
             ("a faint pen: washed out to 35 % of the contrast", lambda img, i: washed_out(img, 0.35), _as_labelled),
+            ("a green highlighter scribbled across", lambda img, i: highlighted(img, i), _as_labelled),
+            ("cut off 0.75 cell above the top row line", lambda img, i: cut_off_at_top(img), _as_labelled),
+            ("a second board half in view beside it", lambda img, i: beside_a_second_board(img), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
                 1.0, 0.45, img.shape[1], dtype=np.float32), (img.shape[0], 1))), _as_labelled),
             ("turned 10 deg", lambda img, i: turned(img, 10.0), _as_labelled),
@@ -444,7 +488,8 @@ def real_photos(repeat: int = 1, accept: float | None = None) -> None:
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
     4,000 px phone photo (the reader works at one scale whatever the camera), and under the
     conditions of :func:`_photo_conditions` (noise, keystone, blur, JPEG, shadows, light, a dark table,
-    turned 10 deg in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
+    a pen beside the board, a faint pen, a highlighter, a cut-off top, a second board, turned 10 deg
+    in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
     import json
     from pathlib import Path
 
