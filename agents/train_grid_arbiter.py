@@ -137,7 +137,9 @@ def fit(x: np.ndarray, y: np.ndarray, l2: float = 1e-2, steps: int = 50) -> Grid
 def choose(photos: Photos, arbiter: GridArbiter | None, accept: float = 1.0) -> tuple[int, float]:
     """Boards right and mean hypotheses made when the reader chooses as :meth:`BoardReader.read`
     does: ``arbiter`` None takes the first hypothesis; else hypotheses are made until one
-    reaches ``accept`` and the most probable made is taken."""
+    reaches ``accept`` and the most probable made is taken. (The reader's cap on a straight field
+    framed on one side only, :meth:`GridArbiter.weigh`, is not simulated: the collected features do
+    not hold the frame.)"""
     right = made = 0
     for x, ok in photos:
         if not len(x):

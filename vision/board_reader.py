@@ -66,7 +66,7 @@ from .cells import _probabilities, _remove_grid_lines, board_features
 from .counts import count_rule, most_probable_board
 from .debug import debug_image
 from .errors import NoBoardError, VisionError
-from .grid_choice import HUE_KINDS, KINDS, PAGE_KINDS, SHIPPED_ARBITER, GridArbiter, Hypothesis, features
+from .grid_choice import HUE_KINDS, KINDS, PAGE_KINDS, SHIPPED_ARBITER, GridArbiter, Hypothesis
 from .grid_lines import (
     _crossing,
     _crossings,
@@ -225,7 +225,7 @@ class BoardReader:
             sub["scale"] = scale / float(sub.pop("_g", 1))  # type: ignore[arg-type]
             if "hash_to_px" in sub:  # the '#' was read: its px to the image's
                 sub["hash_to_image"] = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ sub["hash_to_px"]
-            hyp.p = 1.0 if self.arbiter is None else float(self.arbiter.prob(features(hyp)[None])[0])
+            hyp.p = 1.0 if self.arbiter is None else self.arbiter.weigh(hyp)
             made.append(hyp)
             yield hyp
 
