@@ -76,7 +76,7 @@ FEATURES: tuple[str, ...] = (*BASE_FEATURES, *(f"{f}|{k}" for k in KINDS for f i
 #: such a field is a row or column line taken for a border - the lines crossing it stop there, or a
 #: line gone over twice looks so - and the field is shifted by a cell. The arbiter, whose features
 #: do not show the frame, gave those 0.91-0.95 (real-like seeds 20,000-20,999: 20 such readings, 7
-#: shifted; the '#' readings of the same photos right at p 0.52-0.97 in 4 of them).
+#: shifted; in 4 of the 7 a '#' reading of the same photo was right, at p 0.86-0.95).
 ONE_SIDE_FRAMED_P = 0.5
 SHIPPED_ARBITER = Path(__file__).resolve().parent / "data" / "grid_arbiter.json"
 _MAX_BYTES = 1 << 20
