@@ -150,8 +150,8 @@ class BoardReader:
         ``trace["count_changed"]``: the (row, column) of cells the count rule called otherwise. With
         ``zoom``, an unsure reading of a small field is read again on a crop around it
         (:func:`~kinegym.vision.zoom.second_look`; ``trace["zoom"]``: the crop box)."""
-        reading = self._read_once(image, trace)
-        return second_look(self._read_once, _as_rgb(image), reading, self._accept(), trace) if self.zoom else reading
+        reading = self._read_once(rgb := _as_rgb(image), trace)  # (a grey photo turned to RGB once)
+        return second_look(self._read_once, rgb, reading, self._accept(), trace) if self.zoom else reading
 
     def _accept(self) -> float:
         return self.accept if self.accept is not None else self.arbiter.accept if self.arbiter is not None else 0.0
