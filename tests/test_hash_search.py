@@ -52,9 +52,10 @@ def _tracks(rng: np.random.Generator, vertical: bool, count: int, full: bool) ->
     return out
 
 
-def _draw(seed: int) -> tuple[list[Track], list[Track]]:
+def _draw(seed: int, inks: bool = True) -> tuple[list[Track], list[Track]]:
     """Seed ``seed``'s two families (a third of the seeds full 5 x 5 '#'s), their colours known for
-    both or neither."""
+    both or neither, their inks log-normal - a choice of lines often more than
+    :data:`~kinegym.vision.tracks.INK_SPREAD_FREE` times apart - or all alike without ``inks``."""
     rng = np.random.default_rng(seed)
     full = seed % 3 == 0
     fa = _tracks(rng, True, int(rng.integers(4, 7) if full else rng.integers(2, 7)), full)
@@ -62,6 +63,9 @@ def _draw(seed: int) -> tuple[list[Track], list[Track]]:
     if (fa[0].colour is None) != (fb[0].colour is None):
         for t in fa + fb:
             t.colour = None
+    ink_rng = np.random.default_rng(10_000 + seed)  # (its own stream: the tracks are as they were)
+    for t in fa + fb:
+        t.ink = float(np.exp(ink_rng.normal(0.0, 1.5))) if inks else 1.0
     return fa, fb
 
 
@@ -91,6 +95,25 @@ def test_random_tracks_make_hashes_to_compare() -> None:
                 crossed = hash_search.pairs(fa, fb, 0.06 * 480, 3.0).found
                 none_with_crossings += best is None and int(crossed.sum()) >= k * k
     assert found[2] >= 20 and found[4] >= 5 and none_with_crossings >= 2
+
+
+def test_a_choice_of_lines_of_unlike_ink_scores_lower() -> None:
+    """One pen draws a '#': on the random draws, lines whose inks differ more than
+    :data:`~kinegym.vision.tracks.INK_SPREAD_FREE` times lose score - the best choice changes for
+    some seeds, and never scores more than with the inks alike (the reference and the kernel agree
+    on both, above)."""
+    changed = 0
+    for seed in range(40):
+        for k in (2, 4):
+            unlike, alike = _draw(seed), _draw(seed, inks=False)
+            if len(unlike[0]) >= k and len(unlike[1]) >= k:
+                got = hand_grid._best_hash(*unlike, k, (480, 480), 0.06 * 480, 3.0)
+                want = hand_grid._best_hash(*alike, k, (480, 480), 0.06 * 480, 3.0)
+                assert (got is None) == (want is None)
+                if got is not None:
+                    assert got[0] <= want[0]
+                    changed += got[1:3] != want[1:3]
+    assert changed >= 2
 
 
 def _frame(x0: float, y0: float, x1: float, y1: float) -> tuple[list[Track], list[Track]]:

@@ -228,6 +228,22 @@ def test_a_pen_lying_beside_the_board_is_no_line_direction(bench_vision: ModuleT
         assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
+def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(bench_vision: ModuleType,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """Image10's pen lies across its column lines' tops, where a row line would be: the two column
+    lines cross it, and the '#' of the pen and the drawn middle row line scored best - a row line
+    with ten times the ink of the other three (stop 69's reading: ``...|...|.X.``). One pen draws a
+    '#': lines whose inks differ more than :data:`~kinegym.vision.tracks.INK_SPREAD_FREE` times score
+    lower, and the pale drawn row line below the X is taken; without that the pen is again."""
+    from kinegym.vision import hash_search
+
+    name = "kvuletic2_image10.jpeg"
+    img = bench_vision.with_a_pen_beside(read_image(DATA / name), sorted(LABELS).index(name))
+    assert BoardReader(size=3).read(img).text() == LABELS[name] == "...|.X.|..."
+    monkeypatch.setattr(hash_search, "INK_SPREAD_FREE", math.inf)
+    assert BoardReader(size=3).read(img).text() == "...|...|.X."
+
+
 def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
     four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a

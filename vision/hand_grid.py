@@ -29,8 +29,10 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
 4. **The '#'.** Every choice of ``n - 1`` tracks per family is a hypothesis: it must cross
    pairwise within the drawn extents, its cells must be no more than a plausible tilt apart
    in size, and each line should run on past its outer crossings (the outer cells). The
-   score favours long, strongly inked, regular '#'s with arms, in one pen's colour; the best
-   wins. A frame line is never an interior one: the other lines stop at it (no arms).
+   score favours long, strongly inked, regular '#'s with arms, in one pen's colour and
+   weight (lines whose inks differ more than :data:`~kinegym.vision.tracks.INK_SPREAD_FREE`
+   times are a pen lying on the page beside drawn lines, say); the best wins. A frame line is
+   never an interior one: the other lines stop at it (no arms).
    (:func:`_best_hash` is the readable definition; the search runs its fast kernel,
    :func:`~kinegym.vision.hash_search.best_hash`, tested equal to it.)
 
@@ -56,7 +58,7 @@ from .hash_search import best_hash, pairs
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
 from .polylines import all_crossings, extend, first_crossing, prepare
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
-from .tracks import Track, _dense, _line_directions, _sharing, _tracks
+from .tracks import INK_SPREAD_FREE, INK_SPREAD_WEIGHT, Track, _dense, _line_directions, _sharing, _tracks
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
 
@@ -185,6 +187,10 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
                 u = hue[list(ca) + [len(fa) + j for j in cb]]
                 spread = math.degrees(math.acos(float(np.clip((u @ unit(u.sum(axis=0))).min(), -1.0, 1.0))))
                 score -= 0.02 * max(0.0, spread - HUE_DEG)
+            inks = [fa[i].ink for i in ca] + [fb[j].ink for j in cb]  # one pen: inks alike
+            times = max(inks) / max(min(inks), 1e-9)
+            if times > INK_SPREAD_FREE:
+                score -= INK_SPREAD_WEIGHT * math.log(times / INK_SPREAD_FREE)
             if best is None or score > best[0]:
                 best = (score, tuple(ca[v] for v in oa), tuple(cb[v] for v in ob), pts)
     return best

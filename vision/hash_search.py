@@ -28,7 +28,7 @@ import numpy as np
 from .ink import unit
 from .polylines import all_crossings, extend
 from .ruling import HUE_DEG
-from .tracks import Track, _sharing
+from .tracks import INK_SPREAD_FREE, INK_SPREAD_WEIGHT, Track, _sharing
 
 __all__ = ["best_hash", "pairs", "Pairs"]
 
@@ -145,6 +145,10 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
         for r in np.flatnonzero(keep):
             spread = math.degrees(math.acos(float(np.clip((u[r] @ unit(u[r].sum(axis=0))).min(), -1.0, 1.0))))
             score[r] -= 0.02 * max(0.0, spread - HUE_DEG)
+    inks = np.array([t.ink for t in fa + fb])[np.concatenate([A0, len(fa) + B0], axis=1)]  # one pen: inks alike
+    times = inks.max(axis=1) / np.maximum(inks.min(axis=1), 1e-9)
+    for r in np.flatnonzero(keep & (times > INK_SPREAD_FREE)):  # (math.log, as the reference takes it)
+        score[r] -= INK_SPREAD_WEIGHT * math.log(float(times[r]) / INK_SPREAD_FREE)
     if not keep.any():
         return None
     r = int(np.flatnonzero(keep)[np.argmax(score[keep])])

@@ -44,6 +44,15 @@ THICK_WIDTHS = 2.0
 #: The share of the ink mask thick ink must hold (stop 69: at 0.05 and 0.2 the pen scenes read 13 of
 #: 15 alike; on the real-like sets 0.05 read +5 -5 / +4 of a fresh 300, 0.2 +3 -3 / +3).
 THICK_SHARE = 0.2
+#: One pen draws a '#': a choice of lines whose inks (:attr:`Track.ink`) differ more than this many
+#: times - a dark pen lying on the page taken for a row line beside pale drawn ones (ink 6.8 against
+#: 0.6) - scores :data:`INK_SPREAD_WEIGHT` less per e-fold beyond it (the '#' search, reference and
+#: kernel). A line gone over twice, or fading, stays well within. Stop 70: the real photos with a pen
+#: beside them read image10's '#' right; of the real-like photos 20,000-20,999, 40,000-40,299 and
+#: 60,000-60,299, at 3 x +3 -4 boards, at 8 x one reading changed (20,205, a zoomed second look's).
+INK_SPREAD_FREE = 8.0
+#: What a choice of '#' lines loses per e-fold of ink spread past :data:`INK_SPREAD_FREE`.
+INK_SPREAD_WEIGHT = 0.5
 
 
 @dataclass
