@@ -373,6 +373,19 @@ def highlighted(img: np.ndarray, seed: int) -> np.ndarray:
     return np.clip(img * (1 - dye * (1 - np.array([190, 255, 90]) / 255)), 0, 255).astype(np.uint8)
 
 
+def red_light_spot(img: np.ndarray, seed: int, strength: float = 0.6, radius: float = 0.15) -> np.ndarray:
+    """Photo ``img`` with a red light's glare on the board: the photo blended towards red
+    (255, 70, 60) by ``strength`` at the spot's centre, falling off as a Gaussian ``radius`` of the
+    width wide, the centre within the middle third of the photo - the lines there keep 40 % of
+    their contrast: a held-out condition of :func:`_photo_conditions`."""
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(seed)
+    cx, cy = rng.uniform(0.35, 0.65) * w, rng.uniform(0.35, 0.65) * h
+    yy, xx = np.mgrid[0:h, 0:w]
+    g = strength * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * (radius * w) ** 2))[..., None]
+    return np.clip(img * (1 - g) + g * np.array([255.0, 70.0, 60.0]), 0, 255).astype(np.uint8)
+
+
 def cut_off_at_top(img: np.ndarray, cells: float = 0.75) -> np.ndarray:
     """Photo ``img`` cut off ``cells`` of a cell above the '#''s top row line, where the column lines
     still run on: the field as read on the photo as taken (each of the 15 read right there, as
@@ -457,6 +470,7 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
             ("a dark pen lying beside the board", lambda img, i: with_a_pen_beside(img, i), _as_labelled),
             ("a faint pen: washed out to 35 % of the contrast", lambda img, i: washed_out(img, 0.35), _as_labelled),
             ("a green highlighter scribbled across", lambda img, i: highlighted(img, i), _as_labelled),
+            ("a red light's glare on the board", lambda img, i: red_light_spot(img, i), _as_labelled),
             ("cut off 0.75 cell above the top row line", lambda img, i: cut_off_at_top(img), _as_labelled),
             ("a second board half in view beside it", lambda img, i: beside_a_second_board(img), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
