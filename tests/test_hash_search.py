@@ -104,8 +104,8 @@ def test_a_choice_of_lines_of_unlike_ink_scores_lower() -> None:
     on both, above)."""
     changed = 0
     for seed in range(40):
+        unlike, alike = _draw(seed), _draw(seed, inks=False)
         for k in (2, 4):
-            unlike, alike = _draw(seed), _draw(seed, inks=False)
             if len(unlike[0]) >= k and len(unlike[1]) >= k:
                 got = hand_grid._best_hash(*unlike, k, (480, 480), 0.06 * 480, 3.0)
                 want = hand_grid._best_hash(*alike, k, (480, 480), 0.06 * 480, 3.0)

@@ -231,10 +231,10 @@ def test_a_pen_lying_beside_the_board_is_no_line_direction(bench_vision: ModuleT
 def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(bench_vision: ModuleType,
                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """Image10's pen lies across its column lines' tops, where a row line would be: the two column
-    lines cross it, and the '#' of the pen and the drawn middle row line scored best - a row line
-    with ten times the ink of the other three (stop 69's reading: ``...|...|.X.``). One pen draws a
-    '#': lines whose inks differ more than :data:`~kinegym.vision.tracks.INK_SPREAD_FREE` times score
-    lower, and the pale drawn row line below the X is taken; without that the pen is again."""
+    lines cross it, and the '#' of the pen and the drawn top row line scored best - a row line with
+    ten times the ink of the other three, the board read a row low (stop 69: ``...|...|.X.``). One
+    pen draws a '#': lines whose inks differ more than :data:`~kinegym.vision.tracks.INK_SPREAD_FREE`
+    times score lower, and the pale drawn bottom row line is taken; without that the pen is again."""
     from kinegym.vision import hash_search
 
     name = "kvuletic2_image10.jpeg"
