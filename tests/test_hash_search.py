@@ -116,6 +116,28 @@ def test_a_choice_of_lines_of_unlike_ink_scores_lower() -> None:
     assert changed >= 2
 
 
+def test_a_line_from_the_photo_s_edge_to_its_edge_loses_to_a_drawn_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A notebook's spiral binding along the left edge runs from the photo's top to its bottom, dark
+    and long: with the '#''s left column line it makes a '#' that outscores the drawn one (its rows
+    reach the binding) - unless a line from edge to edge costs
+    :data:`~kinegym.vision.tracks.EDGE_TO_EDGE_COST`. The reference and the kernel agree either way."""
+    binding = Track(np.stack([np.full(12, 12.0), np.linspace(0.0, 479.0, 12)], 1), 1.0, 12)
+    cols = [binding] + [Track(np.stack([np.full(12, x), np.linspace(80.0, 400.0, 12)], 1), 0.6, 12)
+                        for x in (160.0, 300.0)]
+    rows = [Track(np.stack([np.linspace(10.0, 420.0, 12), np.full(12, y)], 1), 0.6, 12) for y in (160.0, 300.0)]
+
+    def both() -> tuple[int, ...]:
+        want = hand_grid._best_hash(cols, rows, 2, (480, 480), 0.06 * 480, 3.0)
+        got = hash_search.best_hash(cols, rows, 2, (480, 480), hash_search.pairs(cols, rows, 0.06 * 480, 3.0))
+        assert want is not None and _same(got, want)
+        return want[1]
+
+    assert both() == (1, 2)  # the drawn columns
+    monkeypatch.setattr(hand_grid, "EDGE_TO_EDGE_COST", 0.0)
+    monkeypatch.setattr(hash_search, "EDGE_TO_EDGE_COST", 0.0)
+    assert both() == (0, 1)  # the binding and the left column
+
+
 def _frame(x0: float, y0: float, x1: float, y1: float) -> tuple[list[Track], list[Track]]:
     """A rectangle's four sides (a whiteboard's frame, a photo's border) as tracks: columns, rows."""
     cols = [Track(np.stack([np.full(12, x), np.linspace(y0, y1, 12)], 1), 1.0, 12) for x in (x0, x1)]

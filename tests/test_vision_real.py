@@ -244,6 +244,21 @@ def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(bench_vision: M
     assert BoardReader(size=3).read(img).text() == "...|...|.X."
 
 
+def test_a_notebook_s_spiral_binding_is_no_column_line(bench_vision: ModuleType,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """Image11 as a notebook's page, its spiral binding along the left side: the binding runs from
+    the photo's top to its bottom, dark and straight, and was taken for the '#''s left column line,
+    the board read a column to the right (``.XX|.OX|..O``). A '#' line from the photo's edge to its
+    edge costs :data:`~kinegym.vision.tracks.EDGE_TO_EDGE_COST`; without that the binding is again."""
+    from kinegym.vision import hash_search
+
+    name = "kvuletic2_image11.jpeg"
+    img = bench_vision.with_a_spiral_binding(read_image(DATA / name), sorted(LABELS).index(name))
+    assert BoardReader(size=3).read(img).text() == LABELS[name] == "XXX|OX.|.OO"
+    monkeypatch.setattr(hash_search, "EDGE_TO_EDGE_COST", 0.0)
+    assert BoardReader(size=3).read(img).text() == ".XX|.OX|..O"
+
+
 def test_a_hand_s_converging_lines_read_on_the_affine_lattice() -> None:
     """Real-like photo 20,142: the '#''s lines converge so much that the projective lattice of its
     four crossings runs off towards a horizon beyond the outer cells (the bottom row read as a

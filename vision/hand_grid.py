@@ -31,8 +31,10 @@ so that every photo from 500 to 4,000 px is processed at the same scale):
    in size, and each line should run on past its outer crossings (the outer cells). The
    score favours long, strongly inked, regular '#'s with arms, in one pen's colour and
    weight (lines whose inks differ more than :data:`~kinegym.vision.tracks.INK_SPREAD_FREE`
-   times are a pen lying on the page beside drawn lines, say); the best wins. A frame line is
-   never an interior one: the other lines stop at it (no arms).
+   times are a pen lying on the page beside drawn lines, say), ending on the page (a line from
+   the photo's edge to its edge - a page's edge, a notebook's binding - costs
+   :data:`~kinegym.vision.tracks.EDGE_TO_EDGE_COST`); the best wins. A frame line is never an
+   interior one: the other lines stop at it (no arms).
    (:func:`_best_hash` is the readable definition; the search runs its fast kernel,
    :func:`~kinegym.vision.hash_search.best_hash`, tested equal to it.)
 
@@ -58,7 +60,16 @@ from .hash_search import best_hash, pairs
 from .ink import colour_at, ink_mask, median_at, noise_floor_and_top, unit
 from .polylines import all_crossings, extend, first_crossing, prepare
 from .ruling import HUE_DEG, Ruling, is_ruled, rules_mask, without_rules
-from .tracks import INK_SPREAD_FREE, INK_SPREAD_WEIGHT, Track, _dense, _line_directions, _sharing, _tracks
+from .tracks import (
+    EDGE_TO_EDGE_COST,
+    INK_SPREAD_FREE,
+    INK_SPREAD_WEIGHT,
+    Track,
+    _dense,
+    _line_directions,
+    _sharing,
+    _tracks,
+)
 
 __all__ = ["GRID_SIDE_PX", "HashGrid", "Track", "find_hash_grid", "search_copy", "crossing_lattice"]
 
@@ -179,6 +190,8 @@ def _best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int],
                         missing += 1
             if missing > k:  # most lines stop at the outer ones: a frame, not a '#'
                 continue
+            # a line from the photo's edge to its edge: a page edge, a binding, a table's edge
+            score -= EDGE_TO_EDGE_COST * sum(at_edge(tr.pts[0]) and at_edge(tr.pts[-1]) for tr, _, _ in chosen)
             # crossings outside both drawn extents (only on the extensions) are weaker
             outside = (pos_a < ext - 2).sum() + (pos_b < ext - 2).sum()
             score -= 0.1 * outside

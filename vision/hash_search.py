@@ -28,7 +28,7 @@ import numpy as np
 from .ink import unit
 from .polylines import all_crossings, extend
 from .ruling import HUE_DEG
-from .tracks import INK_SPREAD_FREE, INK_SPREAD_WEIGHT, Track, _sharing
+from .tracks import EDGE_TO_EDGE_COST, INK_SPREAD_FREE, INK_SPREAD_WEIGHT, Track, _sharing
 
 __all__ = ["best_hash", "pairs", "Pairs"]
 
@@ -133,6 +133,11 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
                 score = np.where(no_arm, score - 0.15, score)
                 missing += no_arm
     keep &= ~(missing > k)
+    across = np.zeros(len(A), np.intp)  # chosen lines that run from the photo's edge to its edge
+    for tracks, chosen in ((fa, A), (fb, B)):
+        both = np.array([at_edge(t.pts[0]) and at_edge(t.pts[-1]) for t in tracks])
+        across += both[chosen].sum(axis=1)
+    score = score - EDGE_TO_EDGE_COST * across
     with np.errstate(divide="ignore", invalid="ignore"):  # (rows with a cell of size 0 are not kept)
         ratio = v[:, -1] / v[:, 0] - 1.0
     outside = (pos_a < ext - 2).sum(axis=(1, 2)) + (pos_b < ext - 2).sum(axis=(1, 2))
