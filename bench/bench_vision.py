@@ -386,6 +386,27 @@ def red_light_spot(img: np.ndarray, seed: int, strength: float = 0.6, radius: fl
     return np.clip(img * (1 - g) + g * np.array([255.0, 70.0, 60.0]), 0, 255).astype(np.uint8)
 
 
+def with_a_spiral_binding(img: np.ndarray, seed: int) -> np.ndarray:
+    """Photo ``img`` as a notebook's page with its spiral binding along the left (even ``seed``) or
+    right side, 6 % of the width in: dark wire loops every 3 % of the height, each with its punched
+    hole beside it, and the cover beyond the page darker: a held-out condition of
+    :func:`_photo_conditions`."""
+    import cv2
+
+    h, w = img.shape[:2]
+    out = img.copy()
+    left = seed % 2 == 0
+    x = int(0.06 * w) if left else int(0.94 * w)
+    cover = np.s_[:, :x - int(0.02 * w)] if left else np.s_[:, x + int(0.02 * w):]
+    out[cover] = (out[cover] * 0.45).astype(np.uint8)
+    r = max(3, int(0.012 * w))
+    hole = x + (int(2.5 * r) if left else -int(2.5 * r))
+    for y in range(max(6, int(0.03 * h)) // 2, h, max(6, int(0.03 * h))):
+        cv2.ellipse(out, (x, y), (int(2.2 * r), r), 0, 0, 360, (35, 35, 40), max(2, w // 250), cv2.LINE_AA)
+        cv2.circle(out, (hole, y), max(2, r // 2), (40, 40, 45), -1, cv2.LINE_AA)
+    return out
+
+
 def cut_off_at_top(img: np.ndarray, cells: float = 0.75) -> np.ndarray:
     """Photo ``img`` cut off ``cells`` of a cell above the '#''s top row line, where the column lines
     still run on: the field as read on the photo as taken (each of the 15 read right there, as
@@ -471,6 +492,7 @@ def _photo_conditions() -> list[tuple[str, Callable[[np.ndarray, int], np.ndarra
             ("a faint pen: washed out to 35 % of the contrast", lambda img, i: washed_out(img, 0.35), _as_labelled),
             ("a green highlighter scribbled across", lambda img, i: highlighted(img, i), _as_labelled),
             ("a red light's glare on the board", lambda img, i: red_light_spot(img, i), _as_labelled),
+            ("a notebook's spiral binding along a side", lambda img, i: with_a_spiral_binding(img, i), _as_labelled),
             ("cut off 0.75 cell above the top row line", lambda img, i: cut_off_at_top(img), _as_labelled),
             ("a second board half in view beside it", lambda img, i: beside_a_second_board(img), _as_labelled),
             ("light falling off to 45 % across", lambda img, i: lit(img, np.tile(np.linspace(
