@@ -284,12 +284,14 @@ def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
     to be passed over as a grid already made. Since stop 65's networks the arbiter gives the straight
     field's reading p 0.921 (0.42 before), just over its accept level 0.92, so the default reader
     stops there - one of the 8 boards of 1,000 the new networks lose (bench/README.md) - and the
-    '#' reading is asked for by making every hypothesis (accept 1)."""
+    '#' reading is asked for by making every hypothesis (accept 1). (Since stop 70 the share-0 '#'
+    search makes a lattice of its own too, read less sure: its former choice, the same lattice, has a
+    line from the photo's edge to its edge, which costs :data:`~kinegym.vision.tracks.EDGE_TO_EDGE_COST`.)"""
     sc = real_like_scene(30_052)
     trace: dict[str, object] = {}
     assert BoardReader(size=3, accept=1.0).read(sc.image, trace).text() == sc.text() == "XXO|XOO|OX."
     kinds = [k for k, _ in trace["hypotheses"]]  # type: ignore[union-attr]
-    assert kinds == ["straight", "hash 22%"]
+    assert kinds[:2] == ["straight", "hash 22%"] and trace["kind"] == "hash 22%"
     made = BoardReader(size=3).hypotheses(sc.image)
     assert same_lattice(made[0].found, made[1].found, 3) and made[1].p > made[0].p
 
