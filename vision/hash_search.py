@@ -111,6 +111,7 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
     score = np.zeros(len(A))
     short = np.zeros(len(A), bool)  # a line too short for its cells and an arm: no '#' (the reference skips it)
     missing = np.zeros(len(A), np.intp)
+    across = np.zeros(len(A), np.intp)  # chosen lines that run from the photo's edge to its edge
     margin = 0.04 * max(h, w)
 
     def at_edge(p: np.ndarray) -> bool:
@@ -121,6 +122,7 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
         strength = np.array([t.strength for t in tracks])
         edge0 = np.array([at_edge(t.pts[0]) for t in tracks])
         edge1 = np.array([at_edge(t.pts[-1]) for t in tracks])
+        across += (edge0 & edge1)[chosen].sum(axis=1)
         for x in range(k):
             i = chosen[:, x]
             q = pos[:, x, :] if axis == 1 else pos[:, :, x]
@@ -133,10 +135,6 @@ def best_hash(fa: list[Track], fb: list[Track], k: int, shape: tuple[int, int], 
                 score = np.where(no_arm, score - 0.15, score)
                 missing += no_arm
     keep &= ~(missing > k)
-    across = np.zeros(len(A), np.intp)  # chosen lines that run from the photo's edge to its edge
-    for tracks, chosen in ((fa, A), (fb, B)):
-        both = np.array([at_edge(t.pts[0]) and at_edge(t.pts[-1]) for t in tracks])
-        across += both[chosen].sum(axis=1)
     score = score - EDGE_TO_EDGE_COST * across
     with np.errstate(divide="ignore", invalid="ignore"):  # (rows with a cell of size 0 are not kept)
         ratio = v[:, -1] / v[:, 0] - 1.0
