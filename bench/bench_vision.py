@@ -399,9 +399,9 @@ def with_a_spiral_binding(img: np.ndarray, seed: int) -> np.ndarray:
     x = int(0.06 * w) if left else int(0.94 * w)
     cover = np.s_[:, :x - int(0.02 * w)] if left else np.s_[:, x + int(0.02 * w):]
     out[cover] = (out[cover] * 0.45).astype(np.uint8)
-    r = max(3, int(0.012 * w))
+    r, step = max(3, int(0.012 * w)), max(6, int(0.03 * h))
     hole = x + (int(2.5 * r) if left else -int(2.5 * r))
-    for y in range(max(6, int(0.03 * h)) // 2, h, max(6, int(0.03 * h))):
+    for y in range(step // 2, h, step):
         cv2.ellipse(out, (x, y), (int(2.2 * r), r), 0, 0, 360, (35, 35, 40), max(2, w // 250), cv2.LINE_AA)
         cv2.circle(out, (hole, y), max(2, r // 2), (40, 40, 45), -1, cv2.LINE_AA)
     return out
@@ -524,8 +524,8 @@ def real_photos(repeat: int = 1, accept: float | None = None) -> None:
     refusals, and the time per frame at their own 577 px, enlarged to 960 x 720 and to a
     4,000 px phone photo (the reader works at one scale whatever the camera), and under the
     conditions of :func:`_photo_conditions` (noise, keystone, blur, JPEG, shadows, light, a dark table,
-    a pen beside the board, a faint pen, a highlighter, a cut-off top, a second board, turned 10 deg
-    in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
+    a pen beside the board, a faint pen, a highlighter, a red light's glare, a spiral binding, a cut-off
+    top, a second board, turned 10 deg in the frame and 15 / 30 deg on a grown canvas, grey, mirrored)."""
     import json
     from pathlib import Path
 
