@@ -363,6 +363,30 @@ def test_a_flick_at_a_line_s_tip_goes_with_the_line_and_a_larger_piece_stays() -
     assert not out[185, 75] and not out[173, 87]  # the O
 
 
+def test_a_flick_joined_up_by_paler_rules_still_goes_with_the_line() -> None:
+    """On graph paper the rules, paler than the pen but above the search's ink level, join a flick at
+    a line's tip up with everything around it: the piece was too large for a flick and stayed, and
+    read as a mark in an outer cell (the 15 real photos on graph paper in black marker: 12 of 15).
+    Where a piece at a tip is no flick, the ink above :data:`~kinegym.vision.hash_cells.TIP_INK` of
+    the line's own darkness is looked at again: the flick goes; the rules, a longer stroke and a
+    round mark at a tip stay."""
+    from kinegym.vision.hash_cells import TIP_INK
+
+    d, grid = _drawn_hash()
+    cv2.line(d, (75, 40), (60, 22), 1.0, 2)  # the flick of the test above
+    cv2.line(d, (125, 40), (185, 5), 1.0, 2)  # a longer stroke
+    cv2.circle(d, (75, 173), 12, 1.0, 2)  # an O at the left line's foot
+    rules = np.zeros_like(d)
+    rules[::9, :] = rules[:, ::9] = 0.35  # graph paper, paler than the pen, above 0.6 x the ink level 0.3
+    d = np.maximum(d, rules)
+    assert 0.6 * grid.threshold < 0.35 < TIP_INK * 1.0
+    out = erase_mask(grid, d)
+    assert out[24, 61] and out[30, 67]  # the flick
+    assert not out[8, 180] and not out[20, 159]  # the longer stroke
+    assert not out[185, 75] and not out[173, 87]  # the O
+    assert not out[27, 100] and not out[100, 27]  # the rules
+
+
 def test_a_narrow_x_against_a_line_s_tip_stays_and_a_stroke_gone_over_goes() -> None:
     """A narrow X drawn against a '#' line's end, beside the line and behind its tip, is elongated
     and under a cell across like a flick, but it does not go on from the tip: it stays (real-like
