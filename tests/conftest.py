@@ -1,5 +1,5 @@
 """Shared test settings: headless, deterministic hypothesis profile; the bench scripts as modules
-(``bench_envs``, ``bench_vision`` fixtures) for tests of their options and of their conditions."""
+(``bench_envs``, ``bench_vision``, ``photo_conditions`` fixtures) for tests of their options and of their conditions."""
 
 import importlib.util
 import os
@@ -37,3 +37,8 @@ def bench_envs() -> ModuleType:
 @pytest.fixture(scope="module")
 def bench_vision() -> ModuleType:
     return _bench("bench_vision")
+
+
+@pytest.fixture(scope="module")
+def photo_conditions() -> ModuleType:
+    return _bench("photo_conditions")

@@ -8,9 +8,12 @@
   crossings (the grid not found, another grid chosen, or which cells).
 * ``bench/bench_vision.py --real-like-from``: the real-like set drawn from other seeds (the
   reader was tuned on 20,000 on; 40,000 on is a held-out draw) reads the seeds asked for.
+* ``bench/photo_conditions.py``: every held-out condition row makes a photo the reader can be given.
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 
 def test_the_parts_of_a_step_are_all_found_and_add_up(bench_envs) -> None:
@@ -80,3 +83,28 @@ def test_why_a_board_read_wrong_was_wrong(bench_vision, capsys) -> None:
     out = capsys.readouterr().out
     assert "Why 2 of 10 real-like boards read wrong" in out
     assert "| refused | 1 | 50% |" in out and "| mark read empty | 0 | 1 | 0 |" in out
+
+
+def test_every_held_out_condition_makes_a_photo_the_reader_can_be_given(photo_conditions) -> None:
+    """``bench/photo_conditions.py``: each row's transform of a real photo gives an RGB uint8 photo of
+    at least 300 px a side, the same for the same photo index (a seeded condition), and another photo
+    than the one given (the graph paper, the pens, the reflection, the ghosts change it); each row's
+    readings include the label itself unless the row turns or mirrors the photo."""
+    import json
+    from pathlib import Path
+
+    from kinegym.vision.image_io import read_image
+
+    data = Path(__file__).resolve().parent / "data" / "real"
+    name = sorted(json.loads((data / "labels.json").read_text())["boards"])[4]  # image13: marks in 6 cells
+    img = read_image(data / name)
+    rows = photo_conditions.photo_conditions()
+    assert len({label for label, _, _ in rows}) == len(rows) >= 40
+    for label, transform, readings in rows:
+        out = transform(img, 4)
+        assert out.dtype == np.uint8 and out.ndim == 3 and out.shape[2] == 3 and min(out.shape[:2]) >= 300, label
+        if label != "as taken, 577 x 433":
+            assert out.shape != img.shape or not np.array_equal(out, img), label
+        if label.startswith(("on graph", "a whiteboard", "ghosts", "every stroke", "group")):
+            assert np.array_equal(out, transform(img, 4)), label
+        assert ("XXO|XO.|O.." in readings("XXO|XO.|O..")) == (label != "mirrored"), label

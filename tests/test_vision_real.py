@@ -62,19 +62,19 @@ def test_a_4000_px_photo_reads_as_its_small_copy() -> None:
     assert matches(BoardReader().read(big).text(), LABELS[name])
 
 
-def test_a_pale_pen_is_ink_too(bench_vision: ModuleType) -> None:
+def test_a_pale_pen_is_ink_too(photo_conditions: ModuleType) -> None:
     """The photos washed out: at 60 % of their contrast 14 of 15 boards read, at 45 % (the
     strongest strokes about 0.11 darker than the board, as pale as ballpoint) all 15: at 60 %
     image7's three '#' hypotheses are all unsure (p 0.375, 0.407, 0.403) and the arbiter takes the
     45 % ink's, which loses the top-right X. (Until stop 65: 15 at 60 % and 13 at 45 %; stops 66-68
     14 at 45 %, the empty image12 given a false X, which the faint pen's floor below mends.)"""
-    right = {c: sum(matches(BoardReader().read(bench_vision.washed_out(read_image(DATA / name), c)).text(), label)
+    right = {c: sum(matches(BoardReader().read(photo_conditions.washed_out(read_image(DATA / name), c)).text(), label)
                     for name, label in LABELS.items()) for c in (0.6, 0.45)}
     assert right[0.6] >= len(LABELS) - 1 and right[0.45] == len(LABELS), right
 
 
 @pytest.mark.parametrize("contrast", [0.35, 0.25])
-def test_a_faint_pen_s_floor_lets_its_lines_in(bench_vision: ModuleType, contrast: float,
+def test_a_faint_pen_s_floor_lets_its_lines_in(photo_conditions: ModuleType, contrast: float,
                                                monkeypatch: pytest.MonkeyPatch) -> None:
     """A pen a third or a quarter as dark as the photos' own (its strongest strokes 0.06-0.09 darker than
     the board): the ink above the noise is taken down to a floor scaled to the strong ink
@@ -83,7 +83,7 @@ def test_a_faint_pen_s_floor_lets_its_lines_in(bench_vision: ModuleType, contras
     at 25 % (eight of the nine others refused)."""
     def reads(name: str) -> bool:
         try:
-            img = bench_vision.washed_out(read_image(DATA / name), contrast)
+            img = photo_conditions.washed_out(read_image(DATA / name), contrast)
             return matches(BoardReader().read(img).text(), LABELS[name])
         except NoBoardError:
             return False
@@ -188,13 +188,13 @@ def test_a_faint_hash_on_a_page_over_a_textured_table_is_read(monkeypatch: pytes
         BoardReader(size=3).read(sc.image)
 
 
-def test_a_photo_on_a_dark_noisy_table_reads(bench_vision: ModuleType, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_photo_on_a_dark_noisy_table_reads(photo_conditions: ModuleType, monkeypatch: pytest.MonkeyPatch) -> None:
     """A dark table's sensor noise, divided by its little light, looked like ink: tracks along the
     page's edge were taken for the '#''s lines (stop 67's reader read image6 on a table 40 grey levels
     dark as ``...|.X.|...``). On a background under ``ink.DIM_BACKGROUND`` of the page's white only what
     stands above the dim parts' own noise is ink: on the table, nothing."""
     name = "kvuletic2_image6.jpeg"
-    img = bench_vision.on_a_dark_table(read_image(DATA / name), 1.3, 11)
+    img = photo_conditions.on_a_dark_table(read_image(DATA / name), 1.3, 11)
     d = ink.ink_map(img)
     assert float(d[:8, :8].max()) == 0.0 and float(d.max()) > 0.3  # the table holds no ink; the page does
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
@@ -204,16 +204,16 @@ def test_a_photo_on_a_dark_noisy_table_reads(bench_vision: ModuleType, monkeypat
 
 
 @pytest.mark.parametrize("name, seed", [("kvuletic2_image10.jpeg", 1), ("kvuletic2_image14.jpeg", 5)])
-def test_a_pen_under_a_hand_s_deep_shadow_is_ink(bench_vision: ModuleType, name: str, seed: int) -> None:
+def test_a_pen_under_a_hand_s_deep_shadow_is_ink(photo_conditions: ModuleType, name: str, seed: int) -> None:
     """Under a shadow leaving a quarter of the light the background is dim too, but quiet: the pen's
     strokes there stand above its own noise and stay ink (a plain cut of dim backgrounds lost them:
     these two read empty or wrong)."""
-    img = bench_vision.under_a_hand_s_shadow(read_image(DATA / name), 0.25, seed)
+    img = photo_conditions.under_a_hand_s_shadow(read_image(DATA / name), 0.25, seed)
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
 @pytest.mark.parametrize("name, seed", [("kvuletic2_image3.jpeg", 8), ("kvuletic2_image4.jpeg", 9)])
-def test_a_pen_lying_beside_the_board_is_no_line_direction(bench_vision: ModuleType, name: str, seed: int,
+def test_a_pen_lying_beside_the_board_is_no_line_direction(photo_conditions: ModuleType, name: str, seed: int,
                                                            monkeypatch: pytest.MonkeyPatch) -> None:
     """A dark pen along the page's edge is the longest, darkest straight thing in view: the strongest
     line direction, with the '#''s rows within 40 deg of it never tried. It is thick ink (it holds a
@@ -221,14 +221,14 @@ def test_a_pen_lying_beside_the_board_is_no_line_direction(bench_vision: ModuleT
     the board reads; without that (:data:`tracks.THICK_SHARE` past 1) it is refused or read wrong."""
     from kinegym.vision import tracks
 
-    img = bench_vision.with_a_pen_beside(read_image(DATA / name), seed)
+    img = photo_conditions.with_a_pen_beside(read_image(DATA / name), seed)
     assert matches(BoardReader(size=3).read(img).text(), LABELS[name])
     monkeypatch.setattr(tracks, "THICK_SHARE", 2.0)
     with contextlib.suppress(NoBoardError):
         assert not matches(BoardReader(size=3).read(img).text(), LABELS[name])
 
 
-def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(bench_vision: ModuleType,
+def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(photo_conditions: ModuleType,
                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """Image10's pen lies across its column lines' tops, where a row line would be: the two column
     lines cross it, and the '#' of the pen and the drawn top row line scored best - a row line with
@@ -238,13 +238,13 @@ def test_a_pen_lying_across_the_column_lines_tops_is_no_row_line(bench_vision: M
     from kinegym.vision import hash_search
 
     name = "kvuletic2_image10.jpeg"
-    img = bench_vision.with_a_pen_beside(read_image(DATA / name), sorted(LABELS).index(name))
+    img = photo_conditions.with_a_pen_beside(read_image(DATA / name), sorted(LABELS).index(name))
     assert BoardReader(size=3).read(img).text() == LABELS[name] == "...|.X.|..."
     monkeypatch.setattr(hash_search, "INK_SPREAD_FREE", math.inf)
     assert BoardReader(size=3).read(img).text() == "...|...|.X."
 
 
-def test_a_notebook_s_spiral_binding_is_no_column_line(bench_vision: ModuleType,
+def test_a_notebook_s_spiral_binding_is_no_column_line(photo_conditions: ModuleType,
                                                        monkeypatch: pytest.MonkeyPatch) -> None:
     """Image11 as a notebook's page, its spiral binding along the left side: the binding runs from
     the photo's top to its bottom, dark and straight, and was taken for the '#''s left column line,
@@ -253,7 +253,7 @@ def test_a_notebook_s_spiral_binding_is_no_column_line(bench_vision: ModuleType,
     from kinegym.vision import hash_search
 
     name = "kvuletic2_image11.jpeg"
-    img = bench_vision.with_a_spiral_binding(read_image(DATA / name), sorted(LABELS).index(name))
+    img = photo_conditions.with_a_spiral_binding(read_image(DATA / name), sorted(LABELS).index(name))
     assert BoardReader(size=3).read(img).text() == LABELS[name] == "XXX|OX.|.OO"
     monkeypatch.setattr(hash_search, "EDGE_TO_EDGE_COST", 0.0)
     assert BoardReader(size=3).read(img).text() == ".XX|.OX|..O"
@@ -296,27 +296,27 @@ def test_a_straight_field_s_lattice_is_read_the_hash_way_too() -> None:
     assert same_lattice(made[0].found, made[1].found, 3) and made[1].p > made[0].p
 
 
-def test_a_track_keeps_to_its_own_stroke_across_a_crossing(bench_vision: ModuleType) -> None:
+def test_a_track_keeps_to_its_own_stroke_across_a_crossing(photo_conditions: ModuleType) -> None:
     """Photo 14 turned 30 deg: the top row line runs on past the right column line, an O above it.
     Across the crossing a peak of other ink lay nearer the track's prediction than the line's own;
     the track took it, another track took the line's next peaks, and the line's track ended in the O
     (the O cut by the erased line, read X; the board ``XXO|XOX|O..``). A track now first takes a peak
     its ink runs on to (:func:`~kinegym.vision.tracks._joined`). The turn is the benchmark's +30 deg
-    condition (``bench_vision.turned_whole``)."""
+    condition (``photo_conditions.turned_whole``)."""
     name = "kvuletic2_image14.jpeg"
-    reading = BoardReader().read(bench_vision.turned_whole(read_image(DATA / name), 30))
+    reading = BoardReader().read(photo_conditions.turned_whole(read_image(DATA / name), 30))
     assert matches(reading.text(), LABELS[name]), reading.text()
 
 
 @pytest.mark.parametrize("name", ["kvuletic2_image13.jpeg", "kvuletic2_image15.jpeg"])
-def test_a_curl_past_where_a_line_s_trace_stops_goes_with_the_line(bench_vision: ModuleType, name: str) -> None:
+def test_a_curl_past_where_a_line_s_trace_stops_goes_with_the_line(photo_conditions: ModuleType, name: str) -> None:
     """Photos 13 and 15 turned 30 deg: the lower row line curls up at its right end, past where its
     trace stops; the curl leaves the column line about a fifth of a cell from the trace's tip, and
     left in it read as an X in the middle-right cell (``XXO|XOX|O..``). A stroke hanging at a tip
     is now sought within :data:`~kinegym.vision.hash_cells.TIP_CELLS` of a cell of it (a pen width
     and a half before stop 67). That wider circle would take a mark beside the line too; a piece
     goes with the line only if it also goes on from the tip or runs along the line."""
-    reading = BoardReader().read(bench_vision.turned_whole(read_image(DATA / name), 30))
+    reading = BoardReader().read(photo_conditions.turned_whole(read_image(DATA / name), 30))
     assert matches(reading.text(), LABELS[name]), reading.text()
 
 
