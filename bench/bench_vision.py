@@ -17,12 +17,14 @@ Sets (seeded, see :func:`kinegym.envs.sim.scenes.random_scene`):
 * ``hard 3x3`` and ``lab 5x5`` (the thesis's set-up: camera on a stand, black pen).
 
 Then the 15 real photos of ``tests/data/real`` at their size, at 960 x 720 and at 4,000 px
-and under what held-out phone photos add (noise, keystone, blur, JPEG, shadow, light, turned,
-grey, mirrored), and the real-like set (:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3
-boards on paper, whiteboards, graph and notebook paper, 520-4,000 px; seeds 20,000 on, or
-``--real-like-from SEED``: the reader was tuned on 20,000 on, 40,000 on is a held-out draw), per
-surface and per photo size, read as the game reads them (``BoardReader(size=3)``, with the
-shipped cell classifier), and beside it what the hand rule alone would have called.
+and under what held-out phone photos add (``bench/photo_conditions.py``: noise, keystone, blur,
+JPEG, shadows, light, pens, graph paper, a reflection, bindings, ghosts, turned, grey, mirrored, and
+the issue's four kinds of held-out photo as groups of those), and the real-like set
+(:func:`kinegym.envs.sim.scenes_real.real_like_scene`: hand-drawn 3 x 3 boards on paper,
+whiteboards, graph and notebook paper, 520-4,000 px; seeds 20,000 on, or ``--real-like-from
+SEED``: the reader was tuned on 20,000 on, 40,000 on is a held-out draw), per surface and per
+photo size, read as the game reads them (``BoardReader(size=3)``, with the shipped cell
+classifier), and beside it what the hand rule alone would have called.
 
 Per set: cells right, whole boards right, X-vs-O right among cells both call marked,
 boards refused (NoBoardError), and the reader's time per frame (median, p95); with ``--why``, why
