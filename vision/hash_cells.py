@@ -48,10 +48,11 @@ TIP_CELLS = 0.25
 #: 0.22 871; on a fresh 300 257, 257 and 258; none at all 873 and 256 (bench/README.md).
 ALONG_CELLS = 0.15
 
-#: At a '#' line's tip the pieces of ink that may be its flick (:func:`erase_mask`) are those darker than
-#: this share of the line's own darkness over its last 0.3 cell (and than the '#' search's ink level):
-#: the same pen's stroke. Paler ink - graph paper's rules, most of all - no longer joins a flick up into
-#: a piece too large to go with the line (where it stayed, and read as a mark in an outer cell).
+#: Where a piece of ink at a '#' line's tip is no flick (:func:`erase_mask`), the ink there darker than
+#: this share of the line's own darkness (its median along its trace) is looked at again: the same pen's
+#: stroke. Paler ink - graph paper's rules, most of all - had joined a flick up into a piece too large to
+#: go with the line, which stayed and read as a mark in an outer cell (stop 71: the 15 real photos on
+#: graph paper in black marker, cut off at the top, 12 -> 14 of 15; bench/README.md).
 TIP_INK = 0.5
 
 #: the most a '#' lattice's far field corner may lie deeper than its near one (:func:`perspective_ratio`);
@@ -208,37 +209,54 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     elongated, no more than :data:`FLICK_CELLS` of a cell across, and goes on from the tip or
     runs along the line (:func:`_goes_on`): a larger piece at a tip is a mark, or marks joined up
     by graph paper's rules, and an elongated piece beside the line, behind its tip, is a narrow X
-    drawn against the line's end; both stay. At each tip the pieces are ink above :data:`TIP_INK`
-    of the line's own darkness there (:func:`_tip_pieces`): paler rules do not join a flick up."""
+    drawn against the line's end; both stay. Where a piece at a tip is no flick, the ink there above
+    :data:`TIP_INK` of the line's own darkness is looked at again (:func:`_tip_pieces`): paler rules
+    may have joined a flick up into something larger."""
     out = np.zeros(d.shape, np.uint8)
     thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
+    tips = np.zeros(d.shape, np.uint8)
     g = grid.crossings
     cell = float(np.median(np.concatenate([np.hypot(*np.diff(g, axis=k).reshape(-1, 2).T) for k in (0, 1)])))
-    ends = []  # each line's two tips: (tip, its outward unit direction, the line's darkness there)
+    ends = []  # each line's two tips: (tip, its outward unit direction)
+    dark = []  # the darkness of each tip's line (the median along its trace)
     tip_px = int(max(thick + 2, TIP_CELLS * cell))
     for tr in grid.cols + grid.rows:
         p = np.rint(extend(tr.dense, 0.5 * grid.stroke_px) * 4).astype(np.int32)
         cv2.polylines(out, [p], False, 1, thick, cv2.LINE_8, shift=2)
+        q = np.rint(tr.dense).astype(np.intp)
+        line = float(np.median(d[np.clip(q[:, 1], 0, d.shape[0] - 1), np.clip(q[:, 0], 0, d.shape[1] - 1)]))
         for from_tip in (tr.dense, tr.dense[::-1]):
-            ends.append((*_tip_and_direction(from_tip, 0.3 * cell), _darkness_along(d, from_tip, math.inf)))
+            ends.append(_tip_and_direction(from_tip, 0.3 * cell))
+            dark.append(line)
+            cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), tip_px, 1, -1)
     lines = out.copy()  # (the pieces are sought beside the traces alone)
-    for tip, _, dark in ends:
-        # the pieces above the search's ink level; where one is no flick, those above the line's own ink
-        # again (paler rules may have joined a flick up into something larger), if that level is higher
-        low, high = 0.6 * grid.threshold, TIP_INK * dark
-        for level in (low, high) if high > low else (low,):
-            kept = 0
-            for ys, xs in _tip_pieces(d, lines, tip, tip_px, level, int(tip_px + 1.5 * FLICK_CELLS * cell) + 2):
+    low = 0.6 * grid.threshold
+    left = ((d > low) & (lines == 0)).astype(np.uint8)
+    n_lab, lab = cv2.connectedComponents(left, connectivity=8)
+    touching = np.unique(lab[(tips > 0) & (left > 0)])
+    touching = touching[touching > 0]
+    wanted = np.zeros(n_lab, bool)
+    wanted[touching] = True
+    at = np.flatnonzero(wanted[lab.ravel()])  # the touching pieces' px in one pass, row by row
+    of = lab.ravel()[at]
+    again: set[int] = set()  # the tips where a piece stayed
+    for c in touching:
+        ys, xs = np.divmod(at[of == c], d.shape[1])
+        if _is_flick(xs, ys, ends, tip_px, cell):
+            out[ys, xs] = 1
+        else:
+            again.update(i for i, (tip, _) in enumerate(ends)
+                         if float(np.min(np.hypot(xs - tip[0], ys - tip[1]))) <= tip_px)
+    for i in sorted(again):
+        if TIP_INK * dark[i] > low:
+            reach = int(tip_px + 1.5 * FLICK_CELLS * cell) + 2
+            for ys, xs in _tip_pieces(d, lines, ends[i][0], tip_px, TIP_INK * dark[i], reach):
                 if _is_flick(xs, ys, ends, tip_px, cell):
                     out[ys, xs] = 1
-                else:
-                    kept += 1
-            if not kept:
-                break
     return out
 
 
-def _is_flick(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.ndarray, float]], tip_px: int,
+def _is_flick(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.ndarray]], tip_px: int,
               cell: float) -> bool:
     """Whether the piece at px ``xs``, ``ys`` touching a line's tip goes with the line
     (:func:`erase_mask`): a speck, or elongated, at most :data:`FLICK_CELLS` across and going on."""
@@ -247,15 +265,7 @@ def _is_flick(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.nd
     if max(xs.max() - xs.min(), ys.max() - ys.min()) > FLICK_CELLS * cell:
         return False  # too large for a flick
     ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
-    return bool(ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, [e[:2] for e in ends], tip_px + 1.5, cell))
-
-
-def _darkness_along(d: np.ndarray, from_tip: np.ndarray, back: float) -> float:
-    """The median darkness of ``d`` on a traced line's last ``back`` px from its tip (the first
-    point of ``from_tip``)."""
-    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(from_tip, axis=0).T))])
-    q = np.rint(from_tip[:max(2, int(np.searchsorted(along, back)))]).astype(np.intp)
-    return float(np.median(d[np.clip(q[:, 1], 0, d.shape[0] - 1), np.clip(q[:, 0], 0, d.shape[1] - 1)]))
+    return bool(ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, ends, tip_px + 1.5, cell))
 
 
 def _tip_pieces(d: np.ndarray, lines: np.ndarray, tip: np.ndarray, near: int, level: float, reach: int
@@ -271,13 +281,9 @@ def _tip_pieces(d: np.ndarray, lines: np.ndarray, tip: np.ndarray, near: int, le
     left = ((d[y0:y1, x0:x1] > level) & (lines[y0:y1, x0:x1] == 0)).astype(np.uint8)
     circle = np.zeros_like(left)
     cv2.circle(circle, (x - x0, y - y0), near, 1, -1)
-    n_lab, lab = cv2.connectedComponents(left, connectivity=8)
+    _, lab = cv2.connectedComponents(left, connectivity=8)
     touching = np.unique(lab[(circle > 0) & (left > 0)])
-    pieces = []
-    for c in touching[touching > 0]:
-        ys, xs = np.nonzero(lab == c)
-        pieces.append((ys + y0, xs + x0))
-    return pieces
+    return [(ys + y0, xs + x0) for ys, xs in (np.nonzero(lab == c) for c in touching[touching > 0])]
 
 
 def _tip_and_direction(from_tip: np.ndarray, back: float) -> tuple[np.ndarray, np.ndarray]:
