@@ -210,7 +210,7 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     runs along the line (:func:`_goes_on`): a larger piece at a tip is a mark, or marks joined up
     by graph paper's rules, and an elongated piece beside the line, behind its tip, is a narrow X
     drawn against the line's end; both stay. Where a piece at a tip is no flick, the ink there above
-    :data:`TIP_INK` of the line's own darkness is looked at again (:func:`_tip_pieces`): paler rules
+    :data:`TIP_INK` of the line's own darkness is looked at again (:func:`_pieces_at`): paler rules
     may have joined a flick up into something larger."""
     out = np.zeros(d.shape, np.uint8)
     thick = max(3, int(round(2.0 * grid.stroke_px + 3.0)))
@@ -231,7 +231,28 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
             cv2.circle(tips, tuple(int(v) for v in np.rint(ends[-1][0])), tip_px, 1, -1)
     lines = out.copy()  # (the pieces are sought beside the traces alone)
     low = 0.6 * grid.threshold
-    left = ((d > low) & (lines == 0)).astype(np.uint8)
+    again: set[int] = set()  # the tips where a piece stayed
+    for ys, xs in _pieces_at(d, lines, tips, low):
+        if _is_flick(xs, ys, ends, tip_px, cell):
+            out[ys, xs] = 1
+        else:
+            again.update(i for i, (tip, _) in enumerate(ends)
+                         if float(np.min(np.hypot(xs - tip[0], ys - tip[1]))) <= tip_px)
+    for level in sorted({TIP_INK * dark[i] for i in again if TIP_INK * dark[i] > low}):
+        at_these = np.zeros_like(tips)
+        for i in again:
+            if TIP_INK * dark[i] == level:
+                cv2.circle(at_these, tuple(int(v) for v in np.rint(ends[i][0])), tip_px, 1, -1)
+        for ys, xs in _pieces_at(d, lines, at_these, level):
+            if _is_flick(xs, ys, ends, tip_px, cell):
+                out[ys, xs] = 1
+    return out
+
+
+def _pieces_at(d: np.ndarray, lines: np.ndarray, tips: np.ndarray, level: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The pieces of ink (``d`` above ``level``, off the ``lines`` mask) that touch the ``tips`` mask:
+    ``(ys, xs)`` px of each, in label order."""
+    left = ((d > level) & (lines == 0)).astype(np.uint8)
     n_lab, lab = cv2.connectedComponents(left, connectivity=8)
     touching = np.unique(lab[(tips > 0) & (left > 0)])
     touching = touching[touching > 0]
@@ -239,21 +260,7 @@ def erase_mask(grid: HashGrid, d: np.ndarray) -> np.ndarray:
     wanted[touching] = True
     at = np.flatnonzero(wanted[lab.ravel()])  # the touching pieces' px in one pass, row by row
     of = lab.ravel()[at]
-    again: set[int] = set()  # the tips where a piece stayed
-    for c in touching:
-        ys, xs = np.divmod(at[of == c], d.shape[1])
-        if _is_flick(xs, ys, ends, tip_px, cell):
-            out[ys, xs] = 1
-        else:
-            again.update(i for i, (tip, _) in enumerate(ends)
-                         if float(np.min(np.hypot(xs - tip[0], ys - tip[1]))) <= tip_px)
-    for i in sorted(again):
-        if TIP_INK * dark[i] > low:
-            reach = int(tip_px + 1.5 * FLICK_CELLS * cell) + 2
-            for ys, xs in _tip_pieces(d, lines, ends[i][0], tip_px, TIP_INK * dark[i], reach):
-                if _is_flick(xs, ys, ends, tip_px, cell):
-                    out[ys, xs] = 1
-    return out
+    return [np.divmod(at[of == c], d.shape[1]) for c in touching]
 
 
 def _is_flick(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.ndarray]], tip_px: int,
@@ -266,24 +273,6 @@ def _is_flick(xs: np.ndarray, ys: np.ndarray, ends: list[tuple[np.ndarray, np.nd
         return False  # too large for a flick
     ev = np.linalg.eigvalsh(np.cov(np.stack([xs, ys]).astype(np.float64)))
     return bool(ev[1] > 5.0 * max(ev[0], 1e-6) and _goes_on(xs, ys, ends, tip_px + 1.5, cell))
-
-
-def _tip_pieces(d: np.ndarray, lines: np.ndarray, tip: np.ndarray, near: int, level: float, reach: int
-                ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The pieces of ink (``d`` above ``level``, off the ``lines`` mask) within ``reach`` px of a line's
-    ``tip`` that touch the circle of ``near`` px round it: ``(ys, xs)`` px of ``d`` each, in label
-    order (a piece cut by the window's edge is larger than any flick)."""
-    h, w = d.shape
-    x, y = int(round(float(tip[0]))), int(round(float(tip[1])))
-    x0, y0, x1, y1 = max(0, x - reach), max(0, y - reach), min(w, x + reach + 1), min(h, y + reach + 1)
-    if x0 >= x1 or y0 >= y1:
-        return []
-    left = ((d[y0:y1, x0:x1] > level) & (lines[y0:y1, x0:x1] == 0)).astype(np.uint8)
-    circle = np.zeros_like(left)
-    cv2.circle(circle, (x - x0, y - y0), near, 1, -1)
-    _, lab = cv2.connectedComponents(left, connectivity=8)
-    touching = np.unique(lab[(circle > 0) & (left > 0)])
-    return [(ys + y0, xs + x0) for ys, xs in (np.nonzero(lab == c) for c in touching[touching > 0])]
 
 
 def _tip_and_direction(from_tip: np.ndarray, back: float) -> tuple[np.ndarray, np.ndarray]:
